@@ -1,0 +1,2 @@
+// Anchor for p2i_msgs until the codec lands.
+#include "msgs/wire.h"

@@ -1,0 +1,40 @@
+// The `p2i` command: dispatches to the subcommands registered in tools/cmd_*.cc.
+#include <cstdio>
+#include <exception>
+#include <string>
+#include <vector>
+
+#include "tools/command.h"
+
+namespace {
+
+void PrintUsage() {
+  std::printf("usage: p2i <command> [args...]\n\ncommands:\n");
+  for (const auto& [name, cmd] : p2i::tools::Commands()) {
+    std::printf("  %-10s %s\n", name.c_str(), cmd.summary.c_str());
+  }
+  std::printf("\nRun 'p2i <command> --help' for a command's options.\n");
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 2 || std::string(argv[1]) == "-h" || std::string(argv[1]) == "--help") {
+    PrintUsage();
+    return argc < 2 ? 1 : 0;
+  }
+  const std::string name = argv[1];
+  auto it = p2i::tools::Commands().find(name);
+  if (it == p2i::tools::Commands().end()) {
+    std::fprintf(stderr, "p2i: unknown command '%s'\n\n", name.c_str());
+    PrintUsage();
+    return 1;
+  }
+  std::vector<std::string> args(argv + 1, argv + argc);
+  try {
+    return it->second.run(args);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "p2i %s: error: %s\n", name.c_str(), e.what());
+    return 1;
+  }
+}
