@@ -1,0 +1,109 @@
+/// @file render_bench.cc
+/// @brief Median time per frame of SimScene::Render on one thread at several resolutions, along
+/// a small-office arm sweep. Prints a table and writes CSV.
+///
+/// Usage: render_bench [--scene small_office|large_office|FILE.yaml] [--frames N]
+///                     [--csv render_bench.csv] [--sensor]
+///                     [--dump DIR]  (also writes the first frame of each size as PNG)
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "scene/sim_scene.h"
+#include "scene/trajectory.h"
+
+namespace {
+
+p2i::scene::CameraInfo MakeCamera(int w, int h) {
+  // 7-Scenes-like field of view (f = 585 at 640x480), scaled to the image width.
+  p2i::scene::CameraInfo c;
+  c.image_width = w;
+  c.image_height = h;
+  const double f = 585.0 * w / 640.0;
+  c.camera_matrix = {f, 0, (w - 1) / 2.0, 0, f, (h - 1) / 2.0, 0, 0, 1};
+  c.projection_matrix = {f, 0, (w - 1) / 2.0, 0, 0, f, (h - 1) / 2.0, 0, 0, 0, 1, 0};
+  c.distortion_coefficients.assign(5, 0.0);
+  return c;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::string scene_name = "small_office", csv_path = "render_bench.csv";
+  int frames = 60;
+  bool sensor = false;
+  std::string dump_dir;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--scene" && i + 1 < argc) {
+      scene_name = argv[++i];
+    } else if (a == "--frames" && i + 1 < argc) {
+      frames = std::max(1, std::stoi(argv[++i]));
+    } else if (a == "--csv" && i + 1 < argc) {
+      csv_path = argv[++i];
+    } else if (a == "--dump" && i + 1 < argc) {
+      dump_dir = argv[++i];
+    } else if (a == "--sensor") {
+      sensor = true;
+    } else {
+      std::cerr << "usage: render_bench [--scene NAME|FILE.yaml] [--frames N] [--csv FILE] [--sensor] [--dump DIR]\n";
+      return 2;
+    }
+  }
+  try {
+    p2i::scene::SimScene scene = scene_name.size() > 5 && scene_name.substr(scene_name.size() - 5) == ".yaml"
+                                     ? p2i::scene::SimScene::FromYamlFile(scene_name)
+                                     : p2i::scene::SimScene::BuiltIn(scene_name);
+    if (sensor) scene.set_sensor_options(p2i::scene::SimSensorOptions::Kinect(1));
+    const auto trajectory = p2i::scene::GenerateArmSweep(p2i::scene::ArmSweepOptions());
+    std::ofstream csv(csv_path);
+    csv << "scene,width,height,frames,median_ms,mean_ms,fps\n";
+    std::printf("scene %s, %d frames per size, one thread%s\n", scene_name.c_str(), frames,
+                sensor ? ", kinect sensor effects" : "");
+    std::printf("%10s %10s %10s %10s\n", "size", "median_ms", "mean_ms", "fps");
+    const int sizes[][2] = {{640, 480}, {256, 256}, {128, 128}};
+    for (const auto& s : sizes) {
+      const auto camera = MakeCamera(s[0], s[1]);
+      std::vector<double> ms;
+      double checksum = 0;
+      for (int f = 0; f < frames; ++f) {
+        const auto& pose = trajectory[(f * 7) % trajectory.size()].pose;
+        const auto t0 = std::chrono::steady_clock::now();
+        const auto sample = scene.Render(pose, camera);
+        const auto t1 = std::chrono::steady_clock::now();
+        checksum += sample.depth.at<float>(s[1] / 2, s[0] / 2);
+        if (f == 0 && !dump_dir.empty()) {
+          const std::string stem = dump_dir + "/" + std::to_string(s[0]) + "x" + std::to_string(s[1]);
+          cv::Mat bgr, depth_mm;
+          cv::cvtColor(sample.rgb, bgr, cv::COLOR_RGB2BGR);
+          sample.depth.convertTo(depth_mm, CV_16U, 1000.0);
+          cv::imwrite(stem + "_rgb.png", bgr);
+          cv::imwrite(stem + "_depth_mm.png", depth_mm);
+        }
+        ms.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
+      }
+      double mean = 0;
+      for (double m : ms) mean += m;
+      mean /= ms.size();
+      std::nth_element(ms.begin(), ms.begin() + ms.size() / 2, ms.end());
+      const double median = ms[ms.size() / 2];
+      std::printf("%4dx%-5d %10.2f %10.2f %10.1f   (checksum %.3f)\n", s[0], s[1], median, mean,
+                  1000.0 / median, checksum);
+      csv << scene_name << "," << s[0] << "," << s[1] << "," << frames << "," << median << ","
+          << mean << "," << 1000.0 / median << "\n";
+    }
+    std::printf("wrote %s\n", csv_path.c_str());
+  } catch (const std::exception& e) {
+    std::cerr << "render_bench: " << e.what() << "\n";
+    return 1;
+  }
+  return 0;
+}

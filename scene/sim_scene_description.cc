@@ -1,0 +1,218 @@
+/// @file sim_scene_description.cc
+/// @brief Strict YAML parsing and validation of synthetic scene descriptions.
+#include "scene/sim_scene_description.h"
+
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+
+#include <yaml-cpp/yaml.h>
+
+#include "scene/sim_yaml_reader.h"
+
+namespace p2i::scene {
+namespace {
+
+std::uint32_t HashName(const std::string& s) {
+  std::uint32_t h = 2166136261u;  // FNV-1a: stable across platforms, unlike std::hash
+  for (unsigned char c : s) h = (h ^ c) * 16777619u;
+  return h;
+}
+
+SimTexture ParseTexture(const SimYamlReader& r, const YAML::Node& node) {
+  static const std::map<std::string, SimTexture> kNames = {
+      {"solid", SimTexture::kSolid}, {"checker", SimTexture::kChecker},
+      {"tiles", SimTexture::kTiles}, {"wood", SimTexture::kWood},
+      {"noise", SimTexture::kNoise}, {"poster", SimTexture::kPoster},
+      {"stripes", SimTexture::kStripes}};
+  const std::string name = r.String(node, "texture");
+  const auto it = kNames.find(name);
+  if (it == kNames.end()) {
+    r.Fail(node, "unknown texture '" + name +
+                     "' (use solid, checker, tiles, wood, noise, poster or stripes)");
+  }
+  return it->second;
+}
+
+}  // namespace
+
+SimSceneDescription SimSceneDescription::FromYamlFile(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error(path + ": cannot open scene file");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return FromYamlString(ss.str(), path);
+}
+
+SimSceneDescription SimSceneDescription::FromYamlString(const std::string& text,
+                                                        const std::string& source) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(text);
+  } catch (const YAML::Exception& e) {
+    throw std::runtime_error(source + ":" + std::to_string(e.mark.line + 1) +
+                             ": YAML syntax error: " + e.msg);
+  }
+  const SimYamlReader r(source);
+  r.CheckKeys(root, {"name", "room", "ambient", "materials", "lights", "objects"}, "scene");
+
+  SimSceneDescription d;
+  if (root["name"]) d.name = r.String(root["name"], "name");
+  r.OptionalDouble(root, "ambient", "scene", &d.ambient);
+
+  // Materials first: room and objects refer to them by name.
+  std::map<std::string, int> material_index;
+  const YAML::Node materials = r.Require(root, "materials", "scene");
+  r.CheckMap(materials, "materials");
+  for (const auto& kv : materials) {
+    SimMaterial m;
+    m.name = kv.first.as<std::string>();
+    const std::string what = "material '" + m.name + "'";
+    r.CheckKeys(kv.second, {"texture", "color", "color2", "scale", "seed"}, what);
+    if (kv.second["texture"]) m.texture = ParseTexture(r, kv.second["texture"]);
+    r.OptionalVec3(kv.second, "color", what, &m.color);
+    r.OptionalVec3(kv.second, "color2", what, &m.color2);
+    r.OptionalDouble(kv.second, "scale", what, &m.scale);
+    m.seed = HashName(m.name);
+    if (kv.second["seed"]) {
+      m.seed = static_cast<std::uint32_t>(r.Double(kv.second["seed"], what + ".seed"));
+    }
+    if (material_index.count(m.name)) r.Fail(kv.first, "duplicate material '" + m.name + "'");
+    material_index[m.name] = static_cast<int>(d.materials.size());
+    d.materials.push_back(m);
+  }
+  const auto lookup = [&](const YAML::Node& node, const std::string& what) {
+    const std::string name = r.String(node, what);
+    const auto it = material_index.find(name);
+    if (it == material_index.end()) {
+      r.Fail(node, what + ": unknown material '" + name + "' (define it under materials:)");
+    }
+    return it->second;
+  };
+
+  const YAML::Node room = r.Require(root, "room", "scene");
+  r.CheckKeys(room, {"size", "floor", "ceiling", "walls"}, "room");
+  d.room_size = r.Vec3(r.Require(room, "size", "room"), "room.size");
+  d.floor_material = lookup(r.Require(room, "floor", "room"), "room.floor");
+  d.ceiling_material = lookup(r.Require(room, "ceiling", "room"), "room.ceiling");
+  const YAML::Node walls = r.Require(room, "walls", "room");
+  if (walls.IsSequence()) {
+    if (walls.size() != 4) r.Fail(walls, "room.walls must be one material or a list of 4");
+    for (int i = 0; i < 4; ++i) d.wall_materials[i] = lookup(walls[i], "room.walls");
+  } else {
+    const int m = lookup(walls, "room.walls");
+    for (int& w : d.wall_materials) w = m;
+  }
+
+  if (root["lights"]) {
+    const YAML::Node lights = root["lights"];
+    if (!lights.IsSequence()) r.Fail(lights, "lights must be a list");
+    for (const auto& ln : lights) {
+      SimLight l;
+      r.CheckKeys(ln, {"type", "position", "direction", "color", "intensity", "range"}, "light");
+      const std::string type = r.String(r.Require(ln, "type", "light"), "light.type");
+      if (type == "point") {
+        l.type = SimLight::Type::kPoint;
+        l.position = r.Vec3(r.Require(ln, "position", "point light"), "light.position");
+        if (ln["direction"]) r.Fail(ln["direction"], "a point light has no direction");
+      } else if (type == "directional") {
+        l.type = SimLight::Type::kDirectional;
+        l.direction = r.Vec3(r.Require(ln, "direction", "directional light"), "light.direction");
+        if (ln["position"]) r.Fail(ln["position"], "a directional light has no position");
+      } else {
+        r.Fail(ln["type"], "unknown light type '" + type + "' (use point or directional)");
+      }
+      r.OptionalVec3(ln, "color", "light", &l.color);
+      r.OptionalDouble(ln, "intensity", "light", &l.intensity);
+      r.OptionalDouble(ln, "range", "light", &l.range);
+      d.lights.push_back(l);
+    }
+  }
+
+  if (root["objects"]) {
+    const YAML::Node objects = root["objects"];
+    if (!objects.IsSequence()) r.Fail(objects, "objects must be a list");
+    for (const auto& on : objects) {
+      SimObject o;
+      r.CheckMap(on, "object");
+      const std::string shape = r.String(r.Require(on, "shape", "object"), "object.shape");
+      o.name = on["name"] ? r.String(on["name"], "object.name") : shape;
+      const std::string what = "object '" + o.name + "'";
+      o.center = r.Vec3(r.Require(on, "center", what), what + ".center");
+      o.material = lookup(r.Require(on, "material", what), what + ".material");
+      if (shape == "box") {
+        o.shape = SimShape::kBox;
+        r.CheckKeys(on, {"name", "shape", "center", "size", "yaw_deg", "material"}, what);
+        o.size = r.Vec3(r.Require(on, "size", what), what + ".size");
+        r.OptionalDouble(on, "yaw_deg", what, &o.yaw_deg);
+      } else if (shape == "cylinder") {
+        o.shape = SimShape::kCylinder;
+        r.CheckKeys(on, {"name", "shape", "center", "radius", "height", "material"}, what);
+        o.radius = r.Double(r.Require(on, "radius", what), what + ".radius");
+        o.height = r.Double(r.Require(on, "height", what), what + ".height");
+      } else if (shape == "sphere") {
+        o.shape = SimShape::kSphere;
+        r.CheckKeys(on, {"name", "shape", "center", "radius", "material"}, what);
+        o.radius = r.Double(r.Require(on, "radius", what), what + ".radius");
+      } else {
+        r.Fail(on["shape"], "unknown shape '" + shape + "' (use box, cylinder or sphere)");
+      }
+      d.objects.push_back(o);
+    }
+  }
+  try {
+    d.Validate();
+  } catch (const std::invalid_argument& e) {
+    throw std::runtime_error(source + ": " + e.what());
+  }
+  return d;
+}
+
+void SimSceneDescription::Validate() const {
+  const auto fail = [](const std::string& m) { throw std::invalid_argument(m); };
+  if (!(room_size.minCoeff() > 0.0) || !room_size.allFinite()) {
+    fail("room size must be three positive numbers (metres)");
+  }
+  if (materials.empty()) fail("a scene needs at least one material");
+  const int nm = static_cast<int>(materials.size());
+  const auto check_index = [&](int i, const std::string& what) {
+    if (i < 0 || i >= nm) fail(what + ": material index out of range");
+  };
+  check_index(floor_material, "floor");
+  check_index(ceiling_material, "ceiling");
+  for (int w : wall_materials) check_index(w, "walls");
+  if (!(ambient >= 0.0 && ambient <= 2.0)) fail("ambient must be in [0, 2]");
+  for (const auto& m : materials) {
+    if (!(m.scale > 0.0)) fail("material '" + m.name + "': scale must be > 0");
+    if (m.color.minCoeff() < 0.0 || m.color.maxCoeff() > 1.0 || m.color2.minCoeff() < 0.0 ||
+        m.color2.maxCoeff() > 1.0) {
+      fail("material '" + m.name + "': colours are RGB in [0, 1]");
+    }
+  }
+  for (const auto& o : objects) {
+    check_index(o.material, "object '" + o.name + "'");
+    if (!o.center.allFinite()) fail("object '" + o.name + "': center must be finite");
+    if (o.shape == SimShape::kBox && !(o.size.minCoeff() > 0.0)) {
+      fail("object '" + o.name + "': box size must be positive");
+    }
+    if (o.shape != SimShape::kBox && !(o.radius > 0.0)) {
+      fail("object '" + o.name + "': radius must be > 0");
+    }
+    if (o.shape == SimShape::kCylinder && !(o.height > 0.0)) {
+      fail("object '" + o.name + "': height must be > 0");
+    }
+  }
+  if (lights.size() > 4) fail("at most 4 lights (the renderer budget is one or two)");
+  for (const auto& l : lights) {
+    if (!(l.intensity >= 0.0)) fail("light intensity must be >= 0");
+    if (!(l.range > 0.0)) fail("light range must be > 0");
+    if (l.type == SimLight::Type::kDirectional && !(l.direction.norm() > 0.0)) {
+      fail("directional light needs a non-zero direction");
+    }
+  }
+}
+
+}  // namespace p2i::scene
