@@ -1,2 +1,0 @@
-// Anchor for p2i_runtime until the runtime lands.
-#include "msgs/wire.h"

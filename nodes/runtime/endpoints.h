@@ -1,0 +1,42 @@
+/// @file endpoints.h
+/// @brief Where default ipc:// endpoints live ($P2I_RUN_DIR) and the discovery registry that
+/// `p2i topic list` reads.
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace p2i::runtime {
+
+/// $P2I_RUN_DIR, else /tmp/p2i-$UID; created (mode 0700) on first use.
+std::string RunDir();
+
+/// Default endpoint for a resolved name: ipc://$P2I_RUN_DIR/<kind>.<name with '/' -> '.'>.ipc
+/// (kind = "topic" or "service"). Over-long paths (ipc paths are limited to ~107 bytes) fall
+/// back to a hashed file name. Every process of a launch derives the same endpoint.
+std::string DefaultEndpoint(const std::string& kind, const std::string& resolved_name);
+
+/// One entry of the discovery registry: a file $P2I_RUN_DIR/registry/<pid>.<kind>.<name>
+/// written by the process that binds the endpoint, removed when it closes (stale entries of
+/// dead processes are ignored and cleaned by List()).
+struct RegistryEntry {
+  std::string kind;      ///< "topic" or "service"
+  std::string name;      ///< resolved name
+  std::string type;      ///< message type name, e.g. "RgbdFrame"
+  std::string endpoint;  ///< bound endpoint (the actual one, also for tcp://*:0)
+  std::string node;      ///< full node name
+  int pid = 0;
+};
+
+/// Process-level registry helpers. Thread-safe (file operations only).
+class Registry {
+ public:
+  /// Writes the entry file; returns its path ("" if the run dir is not writable: discovery is
+  /// best-effort and never fails a node).
+  static std::string Register(const RegistryEntry& e);
+  static void Unregister(const std::string& path);
+  /// All live entries (pid still running), sorted by kind and name.
+  static std::vector<RegistryEntry> List();
+};
+
+}  // namespace p2i::runtime

@@ -1,0 +1,75 @@
+/// @file raw_publisher.h
+/// @brief PUB side of a topic at the WireMessage level: [topic '\0'][header][blobs...].
+#pragma once
+
+#include <atomic>
+#include <memory>
+#include <mutex>
+#include <string>
+
+#include <zmq.hpp>
+
+#include "msgs/wire.h"
+#include "nodes/runtime/transport_stats.h"
+
+namespace p2i::runtime {
+
+struct PublisherOptions {
+  /// "" = DefaultEndpoint("topic", resolved topic) (ipc under $P2I_RUN_DIR). tcp://host:port
+  /// and tcp://127.0.0.1:* work too (the bound port is in Endpoint() and the registry).
+  std::string endpoint;
+  bool bind = true;          ///< false: connect to `endpoint` (a subscriber binds it instead)
+  int sndhwm = 1000;         ///< ZeroMQ default; PUB drops (never blocks) beyond it
+  bool latched = false;      ///< keep the last message and re-publish it (late joiners)
+  double latch_period_s = 1.0;
+};
+
+/// Publishes WireMessages on one topic. The caller fills the header frame (including the u64
+/// sequence number: see Publisher<T>, which does it); this class prepends the topic frame, sends
+/// the blobs without copying, registers the topic for `p2i topic list` and keeps the last message
+/// when latched.
+///
+/// Thread-safety: the PUB socket is owned by this object; Publish() and RepublishLatched()
+/// serialise on an internal mutex (the mutex is the full memory barrier ZeroMQ requires when a
+/// socket is used from more than one thread), so any thread may publish.
+class RawPublisher {
+ public:
+  /// Binds (or connects) at once; throws std::runtime_error naming the topic and endpoint if
+  /// that fails (e.g. the ipc endpoint is already bound by another publisher).
+  RawPublisher(std::string resolved_topic, std::string type_name, std::string node_name,
+               PublisherOptions options);
+  ~RawPublisher();
+  RawPublisher(const RawPublisher&) = delete;
+  RawPublisher& operator=(const RawPublisher&) = delete;
+
+  /// Sends `m` (never blocks: PUB drops when the HWM is full).
+  void Publish(const msgs::WireMessage& m);
+  /// Next u64 sequence number for this publisher (1, 2, 3, ...). Thread-safe.
+  uint64_t NextSeq();
+  /// Sends the last published message again if latched (called by the node's latch timer).
+  void RepublishLatched();
+
+  const std::string& Topic() const { return topic_; }
+  const std::string& TypeName() const { return type_name_; }
+  const std::string& Endpoint() const { return endpoint_; }
+  const PublisherOptions& Options() const { return options_; }
+  const TransportStats& Stats() const { return stats_; }
+
+ private:
+  void SendLocked(const msgs::WireMessage& m);
+
+  std::string topic_;
+  std::string topic_frame_;  // topic + '\0'
+  std::string type_name_;
+  PublisherOptions options_;
+  std::string endpoint_;
+  std::string registry_path_;
+  std::mutex mutex_;
+  zmq::socket_t socket_;
+  std::atomic<uint64_t> seq_{0};
+  bool has_last_ = false;
+  msgs::WireMessage last_;
+  TransportStats stats_;
+};
+
+}  // namespace p2i::runtime
