@@ -11,11 +11,10 @@
 #include <cstdio>
 #include <fstream>
 #include <iostream>
-#include <string>
-#include <vector>
-
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <string>
+#include <vector>
 
 #include "scene/sim_scene.h"
 #include "scene/trajectory.h"
@@ -54,14 +53,16 @@ int main(int argc, char** argv) {
     } else if (a == "--sensor") {
       sensor = true;
     } else {
-      std::cerr << "usage: render_bench [--scene NAME|FILE.yaml] [--frames N] [--csv FILE] [--sensor] [--dump DIR]\n";
+      std::cerr << "usage: render_bench [--scene NAME|FILE.yaml] [--frames N] [--csv FILE] "
+                   "[--sensor] [--dump DIR]\n";
       return 2;
     }
   }
   try {
-    p2i::scene::SimScene scene = scene_name.size() > 5 && scene_name.substr(scene_name.size() - 5) == ".yaml"
-                                     ? p2i::scene::SimScene::FromYamlFile(scene_name)
-                                     : p2i::scene::SimScene::BuiltIn(scene_name);
+    p2i::scene::SimScene scene =
+        scene_name.size() > 5 && scene_name.substr(scene_name.size() - 5) == ".yaml"
+            ? p2i::scene::SimScene::FromYamlFile(scene_name)
+            : p2i::scene::SimScene::BuiltIn(scene_name);
     if (sensor) scene.set_sensor_options(p2i::scene::SimSensorOptions::Kinect(1));
     const auto trajectory = p2i::scene::GenerateArmSweep(p2i::scene::ArmSweepOptions());
     std::ofstream csv(csv_path);
@@ -81,7 +82,8 @@ int main(int argc, char** argv) {
         const auto t1 = std::chrono::steady_clock::now();
         checksum += sample.depth.at<float>(s[1] / 2, s[0] / 2);
         if (f == 0 && !dump_dir.empty()) {
-          const std::string stem = dump_dir + "/" + std::to_string(s[0]) + "x" + std::to_string(s[1]);
+          const std::string stem =
+              dump_dir + "/" + std::to_string(s[0]) + "x" + std::to_string(s[1]);
           cv::Mat bgr, depth_mm;
           cv::cvtColor(sample.rgb, bgr, cv::COLOR_RGB2BGR);
           sample.depth.convertTo(depth_mm, CV_16U, 1000.0);

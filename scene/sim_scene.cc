@@ -80,8 +80,8 @@ SimScene::SimScene(SimSceneDescription description, SimSensorOptions sensor)
   for (const auto& l : description_.lights) {
     Light cl;
     cl.directional = l.type == SimLight::Type::kDirectional;
-    const Eigen::Vector3d towards = cl.directional ? Eigen::Vector3d(-l.direction.normalized())
-                                                   : l.position;
+    const Eigen::Vector3d towards =
+        cl.directional ? Eigen::Vector3d(-l.direction.normalized()) : l.position;
     cl.position_or_direction = towards.cast<float>();
     cl.color = (l.color * l.intensity).cast<float>();
     cl.inv_range2 = static_cast<float>(1.0 / (l.range * l.range));
@@ -113,7 +113,8 @@ SimScene::SimScene(SimSceneDescription description, SimSensorOptions sensor)
     for (int i = 0; i < 8; ++i) {
       const Eigen::Vector3d l((i & 1) ? half.x() : -half.x(), (i & 2) ? half.y() : -half.y(),
                               (i & 4) ? half.z() : -half.z());
-      p.corners[i] = o.center + Eigen::Vector3d(cy * l.x() - sy * l.y(), sy * l.x() + cy * l.y(), l.z());
+      p.corners[i] =
+          o.center + Eigen::Vector3d(cy * l.x() - sy * l.y(), sy * l.x() + cy * l.y(), l.z());
     }
     c->prims.push_back(p);
   }
@@ -428,9 +429,10 @@ RgbdSample SimScene::Render(const Pose& camera_to_world, const CameraInfo& camer
     std::mt19937_64 rng(key);
     std::normal_distribution<float> normal(0.0f, 1.0f);
     std::uniform_real_distribution<float> uniform(0.0f, 1.0f);
-    const float cos_graze = sensor_.grazing_angle_deg > 0.0
-                                ? static_cast<float>(std::cos(sensor_.grazing_angle_deg * M_PI / 180.0))
-                                : -1.0f;
+    const float cos_graze =
+        sensor_.grazing_angle_deg > 0.0
+            ? static_cast<float>(std::cos(sensor_.grazing_angle_deg * M_PI / 180.0))
+            : -1.0f;
     for (int v = 0; v < h; ++v) {
       float* depth_row = out.depth.ptr<float>(v);
       std::uint8_t* rgb_row = out.rgb.ptr<std::uint8_t>(v);
@@ -454,7 +456,8 @@ RgbdSample SimScene::Render(const Pose& camera_to_world, const CameraInfo& camer
           for (int k = 0; k < 3; ++k) {
             const float c = rgb_row[3 * u + k] +
                             static_cast<float>(sensor_.rgb_noise_sigma) * normal(rng) + 0.5f;
-            rgb_row[3 * u + k] = static_cast<std::uint8_t>(c < 0.0f ? 0.0f : (c > 255.0f ? 255.0f : c));
+            rgb_row[3 * u + k] =
+                static_cast<std::uint8_t>(c < 0.0f ? 0.0f : (c > 255.0f ? 255.0f : c));
           }
         }
       }

@@ -3,11 +3,10 @@
 /// depth for any pose and camera (the `sim` camera backend, `p2i render`, test ground truth).
 #pragma once
 
+#include <Eigen/Core>
 #include <memory>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "scene/camera_info.h"
 #include "scene/pose.h"

@@ -2,14 +2,14 @@
 /// @brief Strict YAML parsing and validation of synthetic scene descriptions.
 #include "scene/sim_scene_description.h"
 
+#include <yaml-cpp/yaml.h>
+
 #include <cmath>
 #include <fstream>
 #include <map>
 #include <set>
 #include <sstream>
 #include <stdexcept>
-
-#include <yaml-cpp/yaml.h>
 
 #include "scene/sim_yaml_reader.h"
 
@@ -24,9 +24,9 @@ std::uint32_t HashName(const std::string& s) {
 
 SimTexture ParseTexture(const SimYamlReader& r, const YAML::Node& node) {
   static const std::map<std::string, SimTexture> kNames = {
-      {"solid", SimTexture::kSolid}, {"checker", SimTexture::kChecker},
-      {"tiles", SimTexture::kTiles}, {"wood", SimTexture::kWood},
-      {"noise", SimTexture::kNoise}, {"poster", SimTexture::kPoster},
+      {"solid", SimTexture::kSolid},    {"checker", SimTexture::kChecker},
+      {"tiles", SimTexture::kTiles},    {"wood", SimTexture::kWood},
+      {"noise", SimTexture::kNoise},    {"poster", SimTexture::kPoster},
       {"stripes", SimTexture::kStripes}};
   const std::string name = r.String(node, "texture");
   const auto it = kNames.find(name);

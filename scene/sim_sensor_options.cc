@@ -2,11 +2,11 @@
 /// @brief Sensor effect options: Kinect preset, YAML parsing, validation.
 #include "scene/sim_sensor_options.h"
 
+#include <yaml-cpp/yaml.h>
+
 #include <cmath>
 #include <set>
 #include <stdexcept>
-
-#include <yaml-cpp/yaml.h>
 
 namespace p2i::scene {
 
@@ -32,8 +32,9 @@ SimSensorOptions SimSensorOptions::FromYaml(const YAML::Node& node, const std::s
   if (!node.IsDefined() || node.IsNull()) return o;
   if (!node.IsMap()) fail(node, "must be a map");
   static const std::set<std::string> kKeys = {
-      "preset", "rgb_noise_sigma", "depth_noise_sigma", "depth_noise_quadratic", "min_range",
-      "max_range", "grazing_angle_deg", "depth_dropout", "seed"};
+      "preset",    "rgb_noise_sigma", "depth_noise_sigma", "depth_noise_quadratic",
+      "min_range", "max_range",       "grazing_angle_deg", "depth_dropout",
+      "seed"};
   for (const auto& kv : node) {
     const std::string key = kv.first.as<std::string>();
     if (kKeys.count(key) == 0) fail(kv.first, "unknown key '" + key + "'");

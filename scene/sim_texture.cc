@@ -60,9 +60,9 @@ void SimTextureSampler::Sample(float u, float v, float rgb[3]) const {
       const int parity = (static_cast<int>(std::floor(su)) + static_cast<int>(std::floor(sv))) & 1;
       const float* c = parity ? c2_ : c1_;
       // A faint 1 cm speckle keeps flat squares from being textureless.
-      const float s = 0.92f + 0.16f * Unit(Hash(static_cast<std::int32_t>(std::floor(u * 100.f)),
-                                                static_cast<std::int32_t>(std::floor(v * 100.f)),
-                                                seed_));
+      const float s =
+          0.92f + 0.16f * Unit(Hash(static_cast<std::int32_t>(std::floor(u * 100.f)),
+                                    static_cast<std::int32_t>(std::floor(v * 100.f)), seed_));
       for (int i = 0; i < 3; ++i) rgb[i] = c[i] * s;
       return;
     }
@@ -93,7 +93,8 @@ void SimTextureSampler::Sample(float u, float v, float rgb[3]) const {
       return;
     }
     case SimTexture::kNoise: {
-      const float n = 0.5f * ValueNoise(su, sv, seed_) + 0.3f * ValueNoise(su * 4.f, sv * 4.f, seed_ + 3) +
+      const float n = 0.5f * ValueNoise(su, sv, seed_) +
+                      0.3f * ValueNoise(su * 4.f, sv * 4.f, seed_ + 3) +
                       0.2f * ValueNoise(u * 80.f, v * 80.f, seed_ + 5);
       Mix(c1_, c2_, n, rgb);
       return;
@@ -130,7 +131,9 @@ void SimTextureSampler::Sample(float u, float v, float rgb[3]) const {
         }
         default:  // "text": random blocks on a fine grid
           t = Unit(Hash(static_cast<std::int32_t>(lu * freq * 3.0f),
-                        static_cast<std::int32_t>(lv * freq * 3.0f), h)) < 0.45f ? 1.0f : 0.0f;
+                        static_cast<std::int32_t>(lv * freq * 3.0f), h)) < 0.45f
+                  ? 1.0f
+                  : 0.0f;
           break;
       }
       float a[3], b[3];

@@ -3,14 +3,14 @@
 /// exception naming the source, the line and the key.
 #pragma once
 
+#include <yaml-cpp/yaml.h>
+
+#include <Eigen/Core>
 #include <cmath>
 #include <set>
 #include <sstream>
 #include <stdexcept>
 #include <string>
-
-#include <Eigen/Core>
-#include <yaml-cpp/yaml.h>
 
 namespace p2i::scene {
 

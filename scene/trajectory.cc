@@ -2,12 +2,12 @@
 /// @brief Arm sweeps, adjacent sweeps, orbits and bounded random walks.
 #include "scene/trajectory.h"
 
+#include <yaml-cpp/yaml.h>
+
 #include <algorithm>
 #include <cmath>
 #include <random>
 #include <stdexcept>
-
-#include <yaml-cpp/yaml.h>
 
 #include "scene/sim_scene.h"
 #include "scene/sim_yaml_reader.h"
@@ -38,8 +38,11 @@ void CheckPositive(double v, const char* name) {
 /// Options parsing and validation with the source named on failure.
 template <typename Options, typename Fill>
 Options Parse(const YAML::Node& node, const std::string& source, const std::string& what,
-              const std::set<std::string>& keys, Fill fill) {
+              std::set<std::string> keys, bool allow_type, Fill fill) {
   const SimYamlReader r(source);
+  // GenerateTrajectoriesFromYaml passes the whole map, `type` included (copying the node
+  // without it would lose the line numbers for error messages).
+  if (allow_type) keys.insert("type");
   r.CheckKeys(node, keys, what);
   Options o;
   fill(r, &o);
@@ -76,33 +79,41 @@ Pose LookYawPitch(const Eigen::Vector3d& eye, double yaw_deg, double pitch_deg) 
 
 // ---------------------------------------------------------------- arm sweep
 
+static ArmSweepOptions ParseArmSweepOptions(const YAML::Node& node, const std::string& source,
+                                            bool allow_type) {
+  return Parse<ArmSweepOptions>(node, source, "arm_sweep",
+                                {"base", "reach", "center_yaw_deg", "arc_deg", "heights",
+                                 "pitch_deg", "speed", "rate_hz", "start_time"},
+                                allow_type, [&](const SimYamlReader& r, ArmSweepOptions* o) {
+                                  r.OptionalVec3(node, "base", "arm_sweep", &o->base);
+                                  r.OptionalDouble(node, "reach", "arm_sweep", &o->reach);
+                                  r.OptionalDouble(node, "center_yaw_deg", "arm_sweep",
+                                                   &o->center_yaw_deg);
+                                  r.OptionalDouble(node, "arc_deg", "arm_sweep", &o->arc_deg);
+                                  r.OptionalDouble(node, "pitch_deg", "arm_sweep", &o->pitch_deg);
+                                  r.OptionalDouble(node, "speed", "arm_sweep", &o->speed);
+                                  r.OptionalDouble(node, "rate_hz", "arm_sweep", &o->rate_hz);
+                                  r.OptionalDouble(node, "start_time", "arm_sweep", &o->start_time);
+                                  if (node["heights"]) {
+                                    const YAML::Node h = node["heights"];
+                                    if (!h.IsSequence())
+                                      r.Fail(h, "arm_sweep.heights must be a list of numbers");
+                                    o->heights.clear();
+                                    for (const auto& v : h)
+                                      o->heights.push_back(r.Double(v, "arm_sweep.heights"));
+                                  }
+                                });
+}
+
 ArmSweepOptions ArmSweepOptions::FromYaml(const YAML::Node& node, const std::string& source) {
-  return Parse<ArmSweepOptions>(
-      node, source, "arm_sweep",
-      {"base", "reach", "center_yaw_deg", "arc_deg", "heights", "pitch_deg", "speed", "rate_hz",
-       "start_time"},
-      [&](const SimYamlReader& r, ArmSweepOptions* o) {
-        r.OptionalVec3(node, "base", "arm_sweep", &o->base);
-        r.OptionalDouble(node, "reach", "arm_sweep", &o->reach);
-        r.OptionalDouble(node, "center_yaw_deg", "arm_sweep", &o->center_yaw_deg);
-        r.OptionalDouble(node, "arc_deg", "arm_sweep", &o->arc_deg);
-        r.OptionalDouble(node, "pitch_deg", "arm_sweep", &o->pitch_deg);
-        r.OptionalDouble(node, "speed", "arm_sweep", &o->speed);
-        r.OptionalDouble(node, "rate_hz", "arm_sweep", &o->rate_hz);
-        r.OptionalDouble(node, "start_time", "arm_sweep", &o->start_time);
-        if (node["heights"]) {
-          const YAML::Node h = node["heights"];
-          if (!h.IsSequence()) r.Fail(h, "arm_sweep.heights must be a list of numbers");
-          o->heights.clear();
-          for (const auto& v : h) o->heights.push_back(r.Double(v, "arm_sweep.heights"));
-        }
-      });
+  return ParseArmSweepOptions(node, source, false);
 }
 
 void ArmSweepOptions::Validate() const {
   if (!base.allFinite()) throw std::invalid_argument("base must be finite");
   CheckPositive(reach, "reach");
-  if (!(arc_deg > 0.0 && arc_deg <= 360.0)) throw std::invalid_argument("arc_deg must be in (0, 360]");
+  if (!(arc_deg > 0.0 && arc_deg <= 360.0))
+    throw std::invalid_argument("arc_deg must be in (0, 360]");
   if (heights.empty()) throw std::invalid_argument("heights must list at least one height");
   for (double h : heights) {
     if (!std::isfinite(h)) throw std::invalid_argument("heights must be finite");
@@ -164,10 +175,11 @@ std::vector<StampedPose> GenerateArmSweep(const ArmSweepOptions& o) {
 
 // ---------------------------------------------------------------- adjacent sweeps
 
-AdjacentSweepsOptions AdjacentSweepsOptions::FromYaml(const YAML::Node& node,
-                                                      const std::string& source) {
+static AdjacentSweepsOptions ParseAdjacentSweepsOptions(const YAML::Node& node,
+                                                        const std::string& source,
+                                                        bool allow_type) {
   return Parse<AdjacentSweepsOptions>(
-      node, source, "adjacent_sweeps", {"sweep", "count", "offset", "axis"},
+      node, source, "adjacent_sweeps", {"sweep", "count", "offset", "axis"}, allow_type,
       [&](const SimYamlReader& r, AdjacentSweepsOptions* o) {
         if (node["sweep"]) o->sweep = ArmSweepOptions::FromYaml(node["sweep"], source);
         if (node["count"]) {
@@ -179,14 +191,19 @@ AdjacentSweepsOptions AdjacentSweepsOptions::FromYaml(const YAML::Node& node,
         if (node["axis"]) {
           const std::string a = r.String(node["axis"], "adjacent_sweeps.axis");
           if (a == "radial") {
-            o->axis = Axis::kRadial;
+            o->axis = AdjacentSweepsOptions::Axis::kRadial;
           } else if (a == "vertical") {
-            o->axis = Axis::kVertical;
+            o->axis = AdjacentSweepsOptions::Axis::kVertical;
           } else {
             r.Fail(node["axis"], "adjacent_sweeps.axis must be radial or vertical");
           }
         }
       });
+}
+
+AdjacentSweepsOptions AdjacentSweepsOptions::FromYaml(const YAML::Node& node,
+                                                      const std::string& source) {
+  return ParseAdjacentSweepsOptions(node, source, false);
 }
 
 void AdjacentSweepsOptions::Validate() const {
@@ -215,21 +232,26 @@ std::vector<std::vector<StampedPose>> GenerateAdjacentSweeps(const AdjacentSweep
 
 // ---------------------------------------------------------------- orbit
 
+static OrbitOptions ParseOrbitOptions(const YAML::Node& node, const std::string& source,
+                                      bool allow_type) {
+  return Parse<OrbitOptions>(node, source, "orbit",
+                             {"center", "radius", "height", "revolutions", "start_angle_deg",
+                              "speed", "rate_hz", "start_time"},
+                             allow_type, [&](const SimYamlReader& r, OrbitOptions* o) {
+                               r.OptionalVec3(node, "center", "orbit", &o->center);
+                               r.OptionalDouble(node, "radius", "orbit", &o->radius);
+                               r.OptionalDouble(node, "height", "orbit", &o->height);
+                               r.OptionalDouble(node, "revolutions", "orbit", &o->revolutions);
+                               r.OptionalDouble(node, "start_angle_deg", "orbit",
+                                                &o->start_angle_deg);
+                               r.OptionalDouble(node, "speed", "orbit", &o->speed);
+                               r.OptionalDouble(node, "rate_hz", "orbit", &o->rate_hz);
+                               r.OptionalDouble(node, "start_time", "orbit", &o->start_time);
+                             });
+}
+
 OrbitOptions OrbitOptions::FromYaml(const YAML::Node& node, const std::string& source) {
-  return Parse<OrbitOptions>(
-      node, source, "orbit",
-      {"center", "radius", "height", "revolutions", "start_angle_deg", "speed", "rate_hz",
-       "start_time"},
-      [&](const SimYamlReader& r, OrbitOptions* o) {
-        r.OptionalVec3(node, "center", "orbit", &o->center);
-        r.OptionalDouble(node, "radius", "orbit", &o->radius);
-        r.OptionalDouble(node, "height", "orbit", &o->height);
-        r.OptionalDouble(node, "revolutions", "orbit", &o->revolutions);
-        r.OptionalDouble(node, "start_angle_deg", "orbit", &o->start_angle_deg);
-        r.OptionalDouble(node, "speed", "orbit", &o->speed);
-        r.OptionalDouble(node, "rate_hz", "orbit", &o->rate_hz);
-        r.OptionalDouble(node, "start_time", "orbit", &o->start_time);
-      });
+  return ParseOrbitOptions(node, source, false);
 }
 
 void OrbitOptions::Validate() const {
@@ -261,12 +283,13 @@ std::vector<StampedPose> GenerateOrbit(const OrbitOptions& o) {
 
 // ---------------------------------------------------------------- random walk
 
-RandomWalkOptions RandomWalkOptions::FromYaml(const YAML::Node& node, const std::string& source) {
+static RandomWalkOptions ParseRandomWalkOptions(const YAML::Node& node, const std::string& source,
+                                                bool allow_type) {
   return Parse<RandomWalkOptions>(
       node, source, "random_walk",
       {"duration", "speed", "max_turn_rate_deg", "wall_margin", "clearance", "min_height",
        "max_height", "seed", "rate_hz", "start_time"},
-      [&](const SimYamlReader& r, RandomWalkOptions* o) {
+      allow_type, [&](const SimYamlReader& r, RandomWalkOptions* o) {
         r.OptionalDouble(node, "duration", "random_walk", &o->duration);
         r.OptionalDouble(node, "speed", "random_walk", &o->speed);
         r.OptionalDouble(node, "max_turn_rate_deg", "random_walk", &o->max_turn_rate_deg);
@@ -286,6 +309,10 @@ RandomWalkOptions RandomWalkOptions::FromYaml(const YAML::Node& node, const std:
       });
 }
 
+RandomWalkOptions RandomWalkOptions::FromYaml(const YAML::Node& node, const std::string& source) {
+  return ParseRandomWalkOptions(node, source, false);
+}
+
 void RandomWalkOptions::Validate() const {
   CheckPositive(duration, "duration");
   CheckPositive(speed, "speed");
@@ -294,7 +321,8 @@ void RandomWalkOptions::Validate() const {
   if (!(wall_margin >= 0.0) || !(clearance >= 0.0)) {
     throw std::invalid_argument("wall_margin and clearance must be >= 0");
   }
-  if (!(min_height < max_height)) throw std::invalid_argument("min_height must be below max_height");
+  if (!(min_height < max_height))
+    throw std::invalid_argument("min_height must be below max_height");
   if (!std::isfinite(start_time)) throw std::invalid_argument("start_time must be finite");
 }
 
@@ -306,8 +334,9 @@ std::vector<StampedPose> GenerateRandomWalk(const RandomWalkOptions& o, const Si
   const Eigen::Vector3d hi(room.max.x() - o.wall_margin, room.max.y() - o.wall_margin,
                            std::min(room.max.z() - o.wall_margin, o.max_height));
   if ((hi - lo).minCoeff() <= 0.0) {
-    throw std::runtime_error("random walk: the room minus wall_margin and the height limits "
-                             "leave no space; lower wall_margin or widen min/max_height");
+    throw std::runtime_error(
+        "random walk: the room minus wall_margin and the height limits "
+        "leave no space; lower wall_margin or widen min/max_height");
   }
   const auto ok = [&](const Eigen::Vector3d& p) {
     return (p.array() >= lo.array()).all() && (p.array() <= hi.array()).all() &&
@@ -368,7 +397,8 @@ std::vector<StampedPose> GenerateRandomWalk(const RandomWalkOptions& o, const Si
     const double off = WrapPi(gaze_yaw - inward);
     const double far_from_centre = (p - centre).head<2>().norm();
     gaze_rate = std::clamp(0.9 * gaze_rate + 0.3 * max_turn * gauss(rng), -max_turn, max_turn);
-    if (far_from_centre > 0.5 && std::abs(off) > M_PI / 3) gaze_rate = off > 0 ? -max_turn : max_turn;
+    if (far_from_centre > 0.5 && std::abs(off) > M_PI / 3)
+      gaze_rate = off > 0 ? -max_turn : max_turn;
     gaze_yaw = WrapPi(gaze_yaw + gaze_rate);
     pitch_rate = std::clamp(0.9 * pitch_rate + 0.3 * max_turn * gauss(rng), -max_turn, max_turn);
     if (std::abs(gaze_pitch) > 20 * kDeg) pitch_rate = gaze_pitch > 0 ? -max_turn : max_turn;
@@ -385,16 +415,14 @@ std::vector<std::vector<StampedPose>> GenerateTrajectoriesFromYaml(const YAML::N
   const SimYamlReader r(source);
   r.CheckMap(node, "trajectory");
   const std::string type = r.String(r.Require(node, "type", "trajectory"), "trajectory.type");
-  YAML::Node rest = YAML::Clone(node);
-  rest.remove("type");
-  if (type == "arm_sweep") return {GenerateArmSweep(ArmSweepOptions::FromYaml(rest, source))};
+  if (type == "arm_sweep") return {GenerateArmSweep(ParseArmSweepOptions(node, source, true))};
   if (type == "adjacent_sweeps") {
-    return GenerateAdjacentSweeps(AdjacentSweepsOptions::FromYaml(rest, source));
+    return GenerateAdjacentSweeps(ParseAdjacentSweepsOptions(node, source, true));
   }
-  if (type == "orbit") return {GenerateOrbit(OrbitOptions::FromYaml(rest, source))};
+  if (type == "orbit") return {GenerateOrbit(ParseOrbitOptions(node, source, true))};
   if (type == "random_walk") {
     if (scene == nullptr) throw std::invalid_argument("random_walk trajectories need a scene");
-    return {GenerateRandomWalk(RandomWalkOptions::FromYaml(rest, source), *scene)};
+    return {GenerateRandomWalk(ParseRandomWalkOptions(node, source, true), *scene)};
   }
   r.Fail(node["type"], "unknown trajectory type '" + type +
                            "' (use arm_sweep, adjacent_sweeps, orbit or random_walk)");

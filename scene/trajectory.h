@@ -4,11 +4,10 @@
 /// poses (OpenCV camera axes, world z up) stamped at a fixed rate.
 #pragma once
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "scene/pose.h"
 
@@ -39,10 +38,10 @@ struct ArmSweepOptions {
   double center_yaw_deg = 90.0;          ///< direction of the middle of the arc, from +x about +z
   double arc_deg = 120.0;                ///< angular extent of each arc
   std::vector<double> heights{1.0, 1.3, 1.6};  ///< camera heights above the floor (m)
-  double pitch_deg = -10.0;              ///< camera tilt, negative looks down
-  double speed = 0.15;                   ///< camera speed along the path (m/s)
-  double rate_hz = 20.0;                 ///< pose rate; the paper's videos are 20 frames/s
-  double start_time = 0.0;               ///< stamp of the first pose (s)
+  double pitch_deg = -10.0;                    ///< camera tilt, negative looks down
+  double speed = 0.15;                         ///< camera speed along the path (m/s)
+  double rate_hz = 20.0;                       ///< pose rate; the paper's videos are 20 frames/s
+  double start_time = 0.0;                     ///< stamp of the first pose (s)
 
   /// Keys are the field names; base is [x, y, z], heights a list. Unknown keys are errors
   /// naming `source`, line and key (std::runtime_error).
@@ -55,9 +54,9 @@ struct ArmSweepOptions {
 /// setting (b) (train on one trajectory, test on the adjacent one).
 struct AdjacentSweepsOptions {
   enum class Axis { kRadial, kVertical };
-  ArmSweepOptions sweep;  ///< the first sweep
-  int count = 3;          ///< number of trajectories
-  double offset = 0.1;    ///< distance between neighbouring trajectories (m)
+  ArmSweepOptions sweep;      ///< the first sweep
+  int count = 3;              ///< number of trajectories
+  double offset = 0.1;        ///< distance between neighbouring trajectories (m)
   Axis axis = Axis::kRadial;  ///< radial: reach grows by offset; vertical: heights rise by offset
 
   /// Keys: sweep (an ArmSweepOptions map), count, offset, axis (radial|vertical).
@@ -72,8 +71,8 @@ struct OrbitOptions {
   double radius = 0.8;                    ///< m
   double height = 1.3;                    ///< camera height (m)
   double revolutions = 1.0;
-  double start_angle_deg = 0.0;           ///< from +x about +z
-  double speed = 0.2;                     ///< m/s along the circle
+  double start_angle_deg = 0.0;  ///< from +x about +z
+  double speed = 0.2;            ///< m/s along the circle
   double rate_hz = 20.0;
   double start_time = 0.0;
 
@@ -85,13 +84,13 @@ struct OrbitOptions {
 /// `min_height` and `max_height`, away from objects (by `clearance`), moving at `speed` and
 /// turning its gaze at most `max_turn_rate_deg` per second, steered to keep looking into the room.
 struct RandomWalkOptions {
-  double duration = 30.0;            ///< s
-  double speed = 0.2;                ///< m/s (every step has exactly this length unless blocked)
-  double max_turn_rate_deg = 30.0;   ///< deg/s, gaze yaw and pitch
-  double wall_margin = 0.5;          ///< m from walls
-  double clearance = 0.3;            ///< m from objects
-  double min_height = 0.8;           ///< m
-  double max_height = 1.8;           ///< m
+  double duration = 30.0;           ///< s
+  double speed = 0.2;               ///< m/s (every step has exactly this length unless blocked)
+  double max_turn_rate_deg = 30.0;  ///< deg/s, gaze yaw and pitch
+  double wall_margin = 0.5;         ///< m from walls
+  double clearance = 0.3;           ///< m from objects
+  double min_height = 0.8;          ///< m
+  double max_height = 1.8;          ///< m
   std::uint32_t seed = 0;
   double rate_hz = 20.0;
   double start_time = 0.0;

@@ -1,12 +1,11 @@
 #include "scene/sim_scene.h"
 
+#include <catch2/catch.hpp>
 #include <cmath>
 #include <fstream>
+#include <opencv2/imgproc.hpp>
 #include <sstream>
 #include <thread>
-
-#include <catch2/catch.hpp>
-#include <opencv2/imgproc.hpp>
 
 #include "scene/sim_builtin_scenes.h"
 #include "scene/trajectory.h"
@@ -150,9 +149,9 @@ TEST_CASE("SimScene gives sane output inside an object and looking at nothing", 
   CHECK(cv::countNonZero(away.depth) == 0);
   CHECK(cv::norm(away.rgb, cv::NORM_INF) == 0.0);
   // Straight down and straight up are fine too (no NaN from degenerate rays).
-  const RgbdSample down = scene.Render(Pose({0.0, 0.0, 1.5}, Eigen::Quaterniond(
-                                                                  Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX()))),
-                                       camera);
+  const RgbdSample down = scene.Render(
+      Pose({0.0, 0.0, 1.5}, Eigen::Quaterniond(Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX()))),
+      camera);
   CHECK(sane(down));
   CHECK(down.depth.at<float>(23, 31) == Approx(1.5).margin(0.02));
   CHECK_THROWS_AS(scene.Render(Pose(), MakeCamera(0, 48, 50.0, 0.0, 0.0)), std::invalid_argument);
@@ -240,8 +239,12 @@ TEST_CASE("SimScene renders from several threads at once", "[unit]") {
   const Pose p2 = LookYawPitch({0.5, 0.5, 1.0}, 200.0, -20.0);
   const RgbdSample r1 = scene.Render(p1, camera), r2 = scene.Render(p2, camera);
   RgbdSample t1, t2;
-  std::thread a([&] { for (int i = 0; i < 5; ++i) t1 = scene.Render(p1, camera); });
-  std::thread b([&] { for (int i = 0; i < 5; ++i) t2 = scene.Render(p2, camera); });
+  std::thread a([&] {
+    for (int i = 0; i < 5; ++i) t1 = scene.Render(p1, camera);
+  });
+  std::thread b([&] {
+    for (int i = 0; i < 5; ++i) t2 = scene.Render(p2, camera);
+  });
   a.join();
   b.join();
   CHECK(SamePixels(r1, t1));
@@ -276,15 +279,17 @@ TEST_CASE("SimScene YAML errors name the source, line and key", "[unit]") {
   };
   // Unknown key on line 6.
   std::string text = kTestRoom;
-  text += "objects:\n  - {name: b, shape: box, center: [0, 0, 1], size: [1, 1, 1], material: red,"
-          " colour: [1, 0, 0]}\n";
+  text +=
+      "objects:\n  - {name: b, shape: box, center: [0, 0, 1], size: [1, 1, 1], material: red,"
+      " colour: [1, 0, 0]}\n";
   const std::string unknown = error_of(text);
   CHECK_THAT(unknown, Catch::Contains("my_scene.yaml:10") && Catch::Contains("colour"));
   CHECK_THAT(error_of(std::string(kTestRoom) + "lightz: []\n"),
              Catch::Contains("my_scene.yaml:9") && Catch::Contains("lightz"));
-  CHECK_THAT(error_of(std::string(kTestRoom) +
-                      "objects:\n  - {shape: box, center: [0, 0, 1], size: [1, 1, 1], material: blue}\n"),
-             Catch::Contains("unknown material 'blue'"));
+  CHECK_THAT(
+      error_of(std::string(kTestRoom) +
+               "objects:\n  - {shape: box, center: [0, 0, 1], size: [1, 1, 1], material: blue}\n"),
+      Catch::Contains("unknown material 'blue'"));
   CHECK_THAT(error_of("name: x\nmaterials: {a: {texture: marble}}\nroom: {size: [1, 1, 1], "
                       "floor: a, ceiling: a, walls: a}\n"),
              Catch::Contains("my_scene.yaml:2") && Catch::Contains("marble"));
@@ -299,8 +304,8 @@ TEST_CASE("SimScene YAML errors name the source, line and key", "[unit]") {
 TEST_CASE("SimScene IsFree knows the room and its objects", "[unit]") {
   const SimScene scene = SimScene::FromYamlString(WithBox(), "box_room");
   CHECK(scene.IsFree({0.0, 0.0, 1.5}));
-  CHECK_FALSE(scene.IsFree({1.5, 0.0, 1.5}));        // inside the box
-  CHECK_FALSE(scene.IsFree({1.1, 0.0, 1.5}, 0.2));   // within clearance of its face
+  CHECK_FALSE(scene.IsFree({1.5, 0.0, 1.5}));       // inside the box
+  CHECK_FALSE(scene.IsFree({1.1, 0.0, 1.5}, 0.2));  // within clearance of its face
   CHECK(scene.IsFree({1.1, 0.0, 1.5}, 0.1));
   CHECK_FALSE(scene.IsFree({0.0, 0.0, 3.5}));        // above the ceiling
   CHECK_FALSE(scene.IsFree({1.95, 0.0, 1.0}, 0.1));  // too close to the wall

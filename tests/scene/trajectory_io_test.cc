@@ -1,11 +1,10 @@
 #include "scene/trajectory_io.h"
 
-#include <cstdio>
-#include <fstream>
-
 #include <unistd.h>
 
 #include <catch2/catch.hpp>
+#include <cstdio>
+#include <fstream>
 
 #include "scene/trajectory.h"
 
@@ -29,8 +28,7 @@ TEST_CASE("TUM trajectories round-trip through a file", "[unit]") {
   CHECK(p2i::scene::FormatTumTrajectory(t, "orbit").rfind("# orbit\n", 0) == 0);
 }
 
-TEST_CASE("TUM trajectory parsing skips comments and blank lines, errors name the line",
-          "[unit]") {
+TEST_CASE("TUM trajectory parsing skips comments and blank lines, errors name the line", "[unit]") {
   const std::string text =
       "# ground truth\n"
       "\n"
@@ -47,7 +45,8 @@ TEST_CASE("TUM trajectory parsing skips comments and blank lines, errors name th
                     Catch::Contains("gt.txt:3"));
   CHECK_THROWS_WITH(ParseTumTrajectory("1.0 0 0 1 0 0 0 1\n1.0 0 0 1 0 0 0 1\n", "gt.txt"),
                     Catch::Contains("gt.txt:2") && Catch::Contains("sorted"));
-  CHECK_THROWS_WITH(ParseTumTrajectory("1.0 0 0 x 0 0 0 1\n", "gt.txt"), Catch::Contains("gt.txt:1"));
+  CHECK_THROWS_WITH(ParseTumTrajectory("1.0 0 0 x 0 0 0 1\n", "gt.txt"),
+                    Catch::Contains("gt.txt:1"));
   CHECK_THROWS_WITH(p2i::scene::ReadTumTrajectory("/nonexistent/gt.txt"),
                     Catch::Contains("/nonexistent/gt.txt"));
   CHECK(ParseTumTrajectory("", "empty.txt").empty());

@@ -1,9 +1,9 @@
 #include "scene/trajectory.h"
 
-#include <cmath>
+#include <yaml-cpp/yaml.h>
 
 #include <catch2/catch.hpp>
-#include <yaml-cpp/yaml.h>
+#include <cmath>
 
 #include "scene/sim_scene.h"
 
@@ -112,8 +112,7 @@ TEST_CASE("Orbit circles the point and looks at it", "[unit]") {
   CHECK(Pose::TranslationDistance(t.front().pose, t.back().pose) < o.speed / o.rate_hz + 1e-6);
 }
 
-TEST_CASE("Random walk stays in the room, off the furniture, moves smoothly, is seeded",
-          "[unit]") {
+TEST_CASE("Random walk stays in the room, off the furniture, moves smoothly, is seeded", "[unit]") {
   RandomWalkOptions o;
   o.duration = 60.0;
   o.seed = 3;
@@ -145,7 +144,8 @@ TEST_CASE("Random walk stays in the room, off the furniture, moves smoothly, is 
     CHECK(again.back().pose.equals(t.back().pose, 0.0));
     RandomWalkOptions other = o;
     other.seed = 4;
-    CHECK_FALSE(p2i::scene::GenerateRandomWalk(other, scene).back().pose.equals(t.back().pose, 1e-3));
+    CHECK_FALSE(
+        p2i::scene::GenerateRandomWalk(other, scene).back().pose.equals(t.back().pose, 1e-3));
   }
 }
 
@@ -168,8 +168,9 @@ TEST_CASE("Trajectory options parse strictly from YAML", "[unit]") {
   CHECK_THROWS_WITH(AdjacentSweepsOptions::FromYaml(YAML::Load("{axis: diagonal}"), "t.yaml"),
                     Catch::Contains("radial or vertical"));
   CHECK_THROWS(OrbitOptions::FromYaml(YAML::Load("{radius: 0}"), "t.yaml"));
-  CHECK_THROWS_WITH(RandomWalkOptions::FromYaml(YAML::Load("{min_height: 2, max_height: 1}"), "t.yaml"),
-                    Catch::Contains("min_height"));
+  CHECK_THROWS_WITH(
+      RandomWalkOptions::FromYaml(YAML::Load("{min_height: 2, max_height: 1}"), "t.yaml"),
+      Catch::Contains("min_height"));
 
   const SimScene scene = SimScene::BuiltIn("small_office");
   const auto sets = p2i::scene::GenerateTrajectoriesFromYaml(
@@ -179,9 +180,12 @@ TEST_CASE("Trajectory options parse strictly from YAML", "[unit]") {
       YAML::Load("{type: random_walk, duration: 2, seed: 1}"), "t.yaml", &scene);
   REQUIRE(walk.size() == 1);
   CHECK(walk[0].size() == 41);
-  CHECK_THROWS_WITH(p2i::scene::GenerateTrajectoriesFromYaml(YAML::Load("{type: spiral}"), "t.yaml",
-                                                             &scene),
-                    Catch::Contains("spiral"));
+  CHECK_THROWS_WITH(p2i::scene::GenerateTrajectoriesFromYaml(
+                        YAML::Load("type: orbit\nradius: 1\nradiuss: 2\n"), "t.yaml", &scene),
+                    Catch::Contains("t.yaml:3") && Catch::Contains("radiuss"));
+  CHECK_THROWS_WITH(
+      p2i::scene::GenerateTrajectoriesFromYaml(YAML::Load("{type: spiral}"), "t.yaml", &scene),
+      Catch::Contains("spiral"));
   CHECK_THROWS_AS(p2i::scene::GenerateTrajectoriesFromYaml(YAML::Load("{type: random_walk}"),
                                                            "t.yaml", nullptr),
                   std::invalid_argument);
