@@ -168,6 +168,16 @@ bool SimScene::IsFree(const Eigen::Vector3d& point, double clearance) const {
 }
 
 RgbdSample SimScene::Render(const Pose& camera_to_world, const CameraInfo& camera) const {
+  return RenderImpl(camera_to_world, camera, 0.0, false);
+}
+
+RgbdSample SimScene::Render(const Pose& camera_to_world, const CameraInfo& camera,
+                            double stamp) const {
+  return RenderImpl(camera_to_world, camera, stamp, true);
+}
+
+RgbdSample SimScene::RenderImpl(const Pose& camera_to_world, const CameraInfo& camera,
+                                double stamp, bool stamped) const {
   const int w = camera.image_width, h = camera.image_height;
   const double fx = camera.fx(), fy = camera.fy(), cx = camera.cx(), cy = camera.cy();
   if (w <= 0 || h <= 0 || !(fx > 0.0) || !(fy > 0.0) || !std::isfinite(cx) || !std::isfinite(cy)) {
@@ -324,6 +334,7 @@ RgbdSample SimScene::Render(const Pose& camera_to_world, const CameraInfo& camer
   // Deferred shading: every visible pixel is shaded exactly once.
   RgbdSample out;
   out.pose = camera_to_world;
+  out.stamp = stamp;
   out.rgb.create(h, w, CV_8UC3);
   out.depth.create(h, w, CV_32FC1);
   const bool effects = sensor_.AnyEnabled();
@@ -419,6 +430,11 @@ RgbdSample SimScene::Render(const Pose& camera_to_world, const CameraInfo& camer
     // One generator per frame, seeded from the options' seed and the exact pose and camera:
     // the same inputs give the same noise, different poses give independent noise.
     std::uint64_t key = Mix64(sensor_.seed + 0x1234567ull);
+    if (stamped) {
+      std::uint64_t bits;
+      std::memcpy(&bits, &stamp, sizeof bits);
+      key = Mix64(key ^ bits ^ 0x5851f42d4c957f2dull);
+    }
     const Vector7d v7 = camera_to_world.ToVector7();
     for (int k = 0; k < 7; ++k) {
       std::uint64_t bits;

@@ -54,6 +54,9 @@ class SimScene {
   /// Renders the view from `camera_to_world`. `camera` must have positive size and focal
   /// lengths (std::invalid_argument otherwise). The sample's pose is the input pose, stamp 0.
   RgbdSample Render(const Pose& camera_to_world, const CameraInfo& camera) const;
+  /// Same, for a frame captured at `stamp` seconds: the sample carries the stamp, and sensor
+  /// noise also depends on it (a still camera gets fresh noise every frame, reproducibly).
+  RgbdSample Render(const Pose& camera_to_world, const CameraInfo& camera, double stamp) const;
 
   /// The room's inner bounds.
   SimBounds Bounds() const;
@@ -69,6 +72,9 @@ class SimScene {
   struct Compiled;
   SimSceneDescription description_;
   SimSensorOptions sensor_;
+  RgbdSample RenderImpl(const Pose& camera_to_world, const CameraInfo& camera, double stamp,
+                        bool stamped) const;
+
   std::shared_ptr<const Compiled> compiled_;  // immutable after construction: shared by copies
 };
 

@@ -205,6 +205,8 @@ void SimSceneDescription::Validate() const {
       fail("object '" + o.name + "': height must be > 0");
     }
   }
+  // The renderer's id buffer is 16-bit (6 room faces + objects).
+  if (objects.size() > 30000) fail("at most 30000 objects");
   if (lights.size() > 4) fail("at most 4 lights (the renderer budget is one or two)");
   for (const auto& l : lights) {
     if (!(l.intensity >= 0.0)) fail("light intensity must be >= 0");

@@ -191,6 +191,7 @@ TEST_CASE("SimScene sensor effects change pixels only when on, and are seeded", 
   off.seed = 99;  // a seed alone enables nothing
   scene.set_sensor_options(off);
   CHECK(SamePixels(clean, scene.Render(pose, camera)));
+  CHECK(SamePixels(clean, scene.Render(pose, camera, 3.0)));  // the stamp alone changes nothing
 
   scene.set_sensor_options(SimSensorOptions::Kinect(7));
   const RgbdSample noisy = scene.Render(pose, camera);
@@ -202,6 +203,11 @@ TEST_CASE("SimScene sensor effects change pixels only when on, and are seeded", 
   CHECK(SamePixels(noisy, other.Render(pose, camera)));
   other.set_sensor_options(SimSensorOptions::Kinect(8));
   CHECK_FALSE(SamePixels(noisy, other.Render(pose, camera)));
+  // Stamped frames: fresh noise per stamp, reproducible per stamp, stamp carried.
+  const RgbdSample at1 = scene.Render(pose, camera, 1.0);
+  CHECK(at1.stamp == 1.0);
+  CHECK(SamePixels(at1, scene.Render(pose, camera, 1.0)));
+  CHECK_FALSE(SamePixels(at1, scene.Render(pose, camera, 1.05)));
 
   // Far range: everything beyond max_range becomes a hole, nothing else changes.
   SimSensorOptions far;
