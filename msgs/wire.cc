@@ -1,2 +1,0 @@
-// Anchor for p2i_msgs until the codec lands.
-#include "msgs/wire.h"
