@@ -7,7 +7,6 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
-#include <random>
 #include <stdexcept>
 
 #include "scene/sim_builtin_scenes.h"
@@ -52,6 +51,20 @@ std::uint64_t Mix64(std::uint64_t x) {
   x *= 0x94d049bb133111ebull;
   x ^= x >> 31;
   return x;
+}
+
+/// A uniform number in [0, 1) from 16 bits.
+inline float Uniform16(std::uint64_t bits) {
+  return static_cast<float>(bits & 0xffffu) * (1.0f / 65536.0f);
+}
+
+/// An approximately standard-normal number from 64 random bits: the sum of four 16-bit
+/// uniforms (Irwin-Hall), centred and scaled to unit variance. Tails end at +-3.46 sigma, which
+/// is fine for sensor noise and much cheaper than std::normal_distribution.
+inline float Gaussian4(std::uint64_t bits) {
+  const float sum =
+      Uniform16(bits) + Uniform16(bits >> 16) + Uniform16(bits >> 32) + Uniform16(bits >> 48);
+  return (sum - 2.0f) * 1.7320508f;
 }
 
 }  // namespace
@@ -176,8 +189,8 @@ RgbdSample SimScene::Render(const Pose& camera_to_world, const CameraInfo& camer
   return RenderImpl(camera_to_world, camera, stamp, true);
 }
 
-RgbdSample SimScene::RenderImpl(const Pose& camera_to_world, const CameraInfo& camera,
-                                double stamp, bool stamped) const {
+RgbdSample SimScene::RenderImpl(const Pose& camera_to_world, const CameraInfo& camera, double stamp,
+                                bool stamped) const {
   const int w = camera.image_width, h = camera.image_height;
   const double fx = camera.fx(), fy = camera.fy(), cx = camera.cx(), cy = camera.cy();
   if (w <= 0 || h <= 0 || !(fx > 0.0) || !(fy > 0.0) || !std::isfinite(cx) || !std::isfinite(cy)) {
@@ -442,36 +455,38 @@ RgbdSample SimScene::RenderImpl(const Pose& camera_to_world, const CameraInfo& c
       key = Mix64(key ^ bits);
     }
     key = Mix64(key ^ (static_cast<std::uint64_t>(w) << 32 | static_cast<std::uint64_t>(h)));
-    std::mt19937_64 rng(key);
-    std::normal_distribution<float> normal(0.0f, 1.0f);
-    std::uniform_real_distribution<float> uniform(0.0f, 1.0f);
     const float cos_graze =
         sensor_.grazing_angle_deg > 0.0
             ? static_cast<float>(std::cos(sensor_.grazing_angle_deg * M_PI / 180.0))
             : -1.0f;
+    const auto rgb_sigma = static_cast<float>(sensor_.rgb_noise_sigma);
+    const auto dropout = static_cast<float>(sensor_.depth_dropout);
     for (int v = 0; v < h; ++v) {
       float* depth_row = out.depth.ptr<float>(v);
       std::uint8_t* rgb_row = out.rgb.ptr<std::uint8_t>(v);
       for (int u = 0; u < w; ++u) {
         const std::size_t i = static_cast<std::size_t>(v) * w + u;
+        // Counter-based randomness: two 64-bit hashes per pixel, no generator state, the same
+        // numbers on every platform and standard library.
+        const std::uint64_t r1 = Mix64(key + 2 * i), r2 = Mix64(key + 2 * i + 1);
         float z = depth_row[u];
         if (z > 0.0f) {
           if ((sensor_.max_range > 0.0 && z > sensor_.max_range) ||
               (sensor_.min_range > 0.0 && z < sensor_.min_range) || incidence_cos[i] < cos_graze) {
             z = 0.0f;
-          } else if (sensor_.depth_dropout > 0.0 && uniform(rng) < sensor_.depth_dropout) {
+          } else if (dropout > 0.0f && Uniform16(r2 >> 48) < dropout) {
             z = 0.0f;
           } else if (sensor_.depth_noise_sigma > 0.0 || sensor_.depth_noise_quadratic > 0.0) {
             const float sigma = static_cast<float>(sensor_.depth_noise_sigma +
                                                    sensor_.depth_noise_quadratic * z * z);
-            z = std::max(0.0f, z + sigma * normal(rng));
+            z = std::max(0.0f, z + sigma * Gaussian4(r1));
           }
           depth_row[u] = z;
         }
-        if (sensor_.rgb_noise_sigma > 0.0) {
+        if (rgb_sigma > 0.0f) {
           for (int k = 0; k < 3; ++k) {
-            const float c = rgb_row[3 * u + k] +
-                            static_cast<float>(sensor_.rgb_noise_sigma) * normal(rng) + 0.5f;
+            const float noise = rgb_sigma * Gaussian4(Mix64(r2 + 0x9e3779b97f4a7c15ull * (k + 1)));
+            const float c = rgb_row[3 * u + k] + noise + 0.5f;
             rgb_row[3 * u + k] =
                 static_cast<std::uint8_t>(c < 0.0f ? 0.0f : (c > 255.0f ? 255.0f : c));
           }

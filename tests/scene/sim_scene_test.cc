@@ -317,3 +317,26 @@ TEST_CASE("SimScene IsFree knows the room and its objects", "[unit]") {
   CHECK_FALSE(scene.IsFree({1.95, 0.0, 1.0}, 0.1));  // too close to the wall
   CHECK(scene.Bounds().max.z() == Approx(3.0));
 }
+
+TEST_CASE("SimScene sensor noise has the configured spread", "[unit]") {
+  SimScene scene = SimScene::FromYamlString(kTestRoom, "test_room");
+  const auto camera = MakeCamera(64, 48, 40.0, 31.5, 23.5);
+  const Pose pose = LookYawPitch({0.0, 0.0, 1.5}, 0.0, 0.0);  // the wall at x = 2 fills the view
+  const RgbdSample clean = scene.Render(pose, camera);
+  SimSensorOptions o;
+  o.depth_noise_sigma = 0.01;
+  o.rgb_noise_sigma = 5.0;
+  o.seed = 5;
+  scene.set_sensor_options(o);
+  const RgbdSample noisy = scene.Render(pose, camera);
+  cv::Mat depth_diff = noisy.depth - clean.depth;
+  cv::Mat rgb_diff;
+  cv::subtract(noisy.rgb, clean.rgb, rgb_diff, cv::noArray(), CV_32FC3);
+  cv::Scalar mean, stddev;
+  cv::meanStdDev(depth_diff, mean, stddev);
+  CHECK(std::abs(mean[0]) < 0.002);
+  CHECK(stddev[0] == Approx(0.01).epsilon(0.15));
+  cv::meanStdDev(rgb_diff.reshape(1), mean, stddev);
+  CHECK(std::abs(mean[0]) < 0.5);
+  CHECK(stddev[0] == Approx(5.0).epsilon(0.15));
+}
