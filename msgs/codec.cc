@@ -115,9 +115,12 @@ bool CheckPose(pb::Pose* pose, const std::string& field, Failure* f) {
   return true;
 }
 
-bool RequirePose(bool has, pb::Pose* pose, const std::string& field, Failure* f) {
-  if (!has) return Reject(f, DecodeReason::kBadValue, field + " is missing");
-  return CheckPose(pose, field, f);
+/// For messages whose pose is required (a template, not has_pose() and mutable_pose() as two
+/// arguments: mutable_pose() would create the pose before has_pose() is evaluated).
+template <class M>
+bool RequirePose(M* m, const std::string& field, Failure* f) {
+  if (!m->has_pose()) return Reject(f, DecodeReason::kBadValue, field + " is missing");
+  return CheckPose(m->mutable_pose(), field, f);
 }
 
 bool CheckCameraInfo(const pb::CameraInfo& c, const std::string& path, Failure* f) {
@@ -364,7 +367,7 @@ bool NoBlobs(const WireMessage& wire, Failure* f) {
 
 bool DecodeInto(const WireMessage& wire, pb::PoseStamped* m, Failure* f) {
   return ParseMeta(wire, pb::POSE, m, f) && NoBlobs(wire, f) &&
-         RequirePose(m->has_pose(), m->mutable_pose(), "pose", f);
+         RequirePose(m, "pose", f);
 }
 
 bool DecodeInto(const WireMessage& wire, pb::CameraInfo* m, Failure* f) {
@@ -373,7 +376,7 @@ bool DecodeInto(const WireMessage& wire, pb::CameraInfo* m, Failure* f) {
 
 bool DecodeInto(const WireMessage& wire, pb::PoseRequest* m, Failure* f) {
   return ParseMeta(wire, pb::POSE_REQUEST, m, f) && NoBlobs(wire, f) &&
-         RequirePose(m->has_pose(), m->mutable_pose(), "pose", f) &&
+         RequirePose(m, "pose", f) &&
          CheckNonNegative(m->deadline_ns(), "deadline_ns", f);
 }
 
@@ -439,7 +442,7 @@ bool DecodeInto(const WireMessage& wire, RenderReplyMsg* m, Failure* f) {
   for (int i = 0; i < meta.views_size(); ++i) {
     const std::string field = "views[" + std::to_string(i) + "]";
     pb::ViewMeta* v = meta.mutable_views(i);
-    if (!RequirePose(v->has_pose(), v->mutable_pose(), field + ".pose", f) ||
+    if (!RequirePose(v, field + ".pose", f) ||
         !CheckUnit(v->coverage(), field + ".coverage", f)) {
       return false;
     }
@@ -483,7 +486,7 @@ bool DecodeInto(const WireMessage& wire, RgbdFrame* m, Failure* f) {
 bool DecodeInto(const WireMessage& wire, View* m, Failure* f) {
   pb::View& meta = m->meta;
   if (!ParseMeta(wire, pb::VIEW, &meta, f) ||
-      !RequirePose(meta.has_pose(), meta.mutable_pose(), "pose", f) ||
+      !RequirePose(&meta, "pose", f) ||
       !CheckUnit(meta.coverage(), "coverage", f)) {
     return false;
   }
