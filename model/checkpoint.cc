@@ -1,0 +1,204 @@
+/// @file checkpoint.cc
+/// @brief Checkpoint file IO (see checkpoint.h).
+#include "model/checkpoint.h"
+
+#include <unistd.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <stdexcept>
+
+#include <ATen/CPUGeneratorImpl.h>
+#include <nlohmann/json.hpp>
+
+namespace p2i::model {
+
+namespace {
+
+using nlohmann::json;
+
+json CameraToJson(const scene::CameraInfo& c) {
+  return json{{"name", c.camera_name},
+              {"width", c.image_width},
+              {"height", c.image_height},
+              {"K", c.camera_matrix},
+              {"P", c.projection_matrix}};
+}
+
+scene::CameraInfo CameraFromJson(const json& j) {
+  scene::CameraInfo c;
+  c.camera_name = j.at("name").get<std::string>();
+  c.image_width = j.at("width").get<int>();
+  c.image_height = j.at("height").get<int>();
+  c.camera_matrix = j.at("K").get<std::array<double, 9>>();
+  c.projection_matrix = j.at("P").get<std::array<double, 12>>();
+  c.distortion_coefficients.assign(5, 0.0);
+  return c;
+}
+
+void SaveModule(torch::serialize::OutputArchive& root, const std::string& key,
+                const std::shared_ptr<torch::nn::Module>& module) {
+  if (!module) return;
+  torch::serialize::OutputArchive sub;
+  module->save(sub);
+  root.write(key, sub);
+}
+
+void LoadModule(torch::serialize::InputArchive& root, const std::string& key,
+                const std::shared_ptr<torch::nn::Module>& module, const std::string& path) {
+  if (!module) return;
+  torch::serialize::InputArchive sub;
+  if (!root.try_read(key, sub))
+    throw std::runtime_error("checkpoint " + path + ": missing module '" + key + "'");
+  module->load(sub);
+}
+
+void SaveOptimizer(torch::serialize::OutputArchive& root, const std::string& key,
+                   torch::optim::Adam* opt) {
+  if (opt == nullptr) return;
+  torch::serialize::OutputArchive sub;
+  opt->save(sub);
+  root.write(key, sub);
+}
+
+void LoadOptimizer(torch::serialize::InputArchive& root, const std::string& key,
+                   torch::optim::Adam* opt) {
+  if (opt == nullptr) return;
+  torch::serialize::InputArchive sub;
+  // A checkpoint written before this optimiser took a step has no state for it: keep it fresh.
+  if (root.try_read(key, sub)) opt->load(sub);
+}
+
+}  // namespace
+
+std::string CheckpointMeta::ToJson() const {
+  json j;
+  j["format_version"] = format_version;
+  j["config_yaml"] = config.ToYamlString();
+  j["resolution"] = config.resolution;
+  j["channels"] = config.Channels();
+  j["depth_max"] = config.depth_max;
+  j["pose_t_min"] = normalizer.t_min;
+  j["pose_t_max"] = normalizer.t_max;
+  j["camera"] = CameraToJson(camera);
+  j["phase1_step"] = phase1_step;
+  j["phase2_step"] = phase2_step;
+  j["lr_scale"] = lr_scale;
+  j["rollbacks"] = rollbacks;
+  return j.dump(2);
+}
+
+CheckpointMeta CheckpointMeta::FromJson(const std::string& text, const std::string& source) {
+  CheckpointMeta m;
+  try {
+    const json j = json::parse(text);
+    m.format_version = j.at("format_version").get<int>();
+    if (m.format_version != kCheckpointFormatVersion) return m;  // the caller refuses it
+    m.config = P2iConfig::FromYamlString(j.at("config_yaml").get<std::string>(), source);
+    m.normalizer.t_min = j.at("pose_t_min").get<std::array<double, 3>>();
+    m.normalizer.t_max = j.at("pose_t_max").get<std::array<double, 3>>();
+    m.camera = CameraFromJson(j.at("camera"));
+    m.phase1_step = j.at("phase1_step").get<int>();
+    m.phase2_step = j.at("phase2_step").get<int>();
+    m.lr_scale = j.at("lr_scale").get<double>();
+    m.rollbacks = j.at("rollbacks").get<int>();
+  } catch (const json::exception& e) {
+    throw std::runtime_error("checkpoint " + source + ": bad metadata: " + e.what());
+  }
+  return m;
+}
+
+Networks::Networks(const P2iConfig& config) {
+  g = Generator(config);
+  if (!config.IsBaseline()) {
+    d = Discriminator(config);
+    if (config.enet) e = Enhancer(config);
+  }
+}
+
+void WriteFileAtomically(const std::string& path,
+                         const std::function<void(const std::string& temp_path)>& writer) {
+  const std::string temp = path + ".tmp." + std::to_string(::getpid());
+  try {
+    writer(temp);
+  } catch (...) {
+    std::remove(temp.c_str());
+    throw;
+  }
+  std::error_code ec;
+  std::filesystem::rename(temp, path, ec);
+  if (ec) {
+    std::remove(temp.c_str());
+    throw std::runtime_error("cannot rename " + temp + " to " + path + ": " + ec.message());
+  }
+}
+
+void SaveCheckpoint(const std::string& path, const CheckpointMeta& meta, Networks& nets,
+                    const Optimizers& optimizers) {
+  torch::serialize::OutputArchive archive;
+  archive.write("meta", c10::IValue(meta.ToJson()));
+  SaveModule(archive, "G", nets.g.ptr());
+  if (nets.d) SaveModule(archive, "D", nets.d.ptr());
+  if (nets.e) SaveModule(archive, "ENET", nets.e.ptr());
+  SaveOptimizer(archive, "opt_G", optimizers.g);
+  SaveOptimizer(archive, "opt_D", optimizers.d);
+  SaveOptimizer(archive, "opt_ENET", optimizers.e);
+  auto gen = at::detail::getDefaultCPUGenerator();
+  archive.write("rng_state", gen.get_state());
+  WriteFileAtomically(path, [&](const std::string& temp) {
+    try {
+      archive.save_to(temp);
+    } catch (const c10::Error& e) {
+      throw std::runtime_error("cannot write checkpoint " + temp + ": " + e.what_without_backtrace());
+    }
+  });
+}
+
+CheckpointMeta ReadCheckpointMeta(const std::string& path) {
+  if (!std::filesystem::exists(path))
+    throw std::runtime_error("checkpoint " + path + " does not exist");
+  torch::serialize::InputArchive archive;
+  c10::IValue meta_value;
+  try {
+    archive.load_from(path);
+    if (!archive.try_read("meta", meta_value))
+      throw std::runtime_error("checkpoint " + path + " has no metadata: not a p2i checkpoint");
+  } catch (const c10::Error& e) {
+    throw std::runtime_error("cannot read checkpoint " + path + ": " + e.what_without_backtrace());
+  }
+  CheckpointMeta meta = CheckpointMeta::FromJson(meta_value.toStringRef(), path);
+  if (meta.format_version != kCheckpointFormatVersion)
+    throw std::runtime_error("checkpoint " + path + " has format version " +
+                             std::to_string(meta.format_version) + " but this build reads version " +
+                             std::to_string(kCheckpointFormatVersion) +
+                             ": retrain it with this build (p2i train) or use the p2i build that "
+                             "wrote it");
+  return meta;
+}
+
+CheckpointMeta LoadCheckpoint(const std::string& path, Networks& nets,
+                              const Optimizers& optimizers, bool restore_rng) {
+  CheckpointMeta meta = ReadCheckpointMeta(path);
+  torch::serialize::InputArchive archive;
+  try {
+    archive.load_from(path);
+    LoadModule(archive, "G", nets.g.ptr(), path);
+    if (nets.d) LoadModule(archive, "D", nets.d.ptr(), path);
+    if (nets.e) LoadModule(archive, "ENET", nets.e.ptr(), path);
+    LoadOptimizer(archive, "opt_G", optimizers.g);
+    LoadOptimizer(archive, "opt_D", optimizers.d);
+    LoadOptimizer(archive, "opt_ENET", optimizers.e);
+    if (restore_rng) {
+      torch::Tensor state;
+      archive.read("rng_state", state);
+      auto gen = at::detail::getDefaultCPUGenerator();
+      gen.set_state(state);
+    }
+  } catch (const c10::Error& e) {
+    throw std::runtime_error("cannot load checkpoint " + path + ": " + e.what_without_backtrace() +
+                             " (was it written for another config?)");
+  }
+  return meta;
+}
+
+}  // namespace p2i::model

@@ -1,0 +1,71 @@
+/// @file checkpoint.h
+/// @brief Model checkpoints: one file holding the modules, the optimiser states, the CPU RNG
+/// state and a JSON metadata record (format version, config, pose normalisation, resolution,
+/// channels, steps, camera). Written atomically. INTERNAL to model/ (includes LibTorch).
+#pragma once
+
+#include <functional>
+#include <memory>
+#include <string>
+
+#include <torch/torch.h>
+
+#include "model/networks.h"
+#include "model/p2i_config.h"
+#include "scene/camera_info.h"
+
+namespace p2i::model {
+
+/// Bumped whenever the file layout or a module's parameter layout changes. Loading a checkpoint
+/// of another version is refused.
+constexpr int kCheckpointFormatVersion = 1;
+
+/// The checkpoint's metadata (stored as JSON inside the file).
+struct CheckpointMeta {
+  int format_version = kCheckpointFormatVersion;
+  P2iConfig config;
+  PoseNormalizer normalizer;
+  scene::CameraInfo camera;  ///< intrinsics of the views at config.resolution
+  int phase1_step = 0;       ///< phase-1 steps done
+  int phase2_step = 0;       ///< phase-2 (ENET) steps done
+  double lr_scale = 1.0;     ///< divergence-guard learning-rate factor
+  int rollbacks = 0;
+
+  std::string ToJson() const;
+  static CheckpointMeta FromJson(const std::string& json, const std::string& source);
+};
+
+/// The networks of one model. d and e are null for the CNN baseline (e also when enet is off).
+struct Networks {
+  explicit Networks(const P2iConfig& config);
+  Generator g{nullptr};
+  Discriminator d{nullptr};
+  Enhancer e{nullptr};
+};
+
+/// Optimisers to save/restore with a checkpoint (any may be null).
+struct Optimizers {
+  torch::optim::Adam* g = nullptr;
+  torch::optim::Adam* d = nullptr;
+  torch::optim::Adam* e = nullptr;
+};
+
+/// Calls writer(temp_path), then renames the temp file onto `path`. If writer throws, the temp
+/// file is removed, `path` is left as it was and the exception propagates.
+void WriteFileAtomically(const std::string& path,
+                         const std::function<void(const std::string& temp_path)>& writer);
+
+/// Writes everything atomically. Throws std::runtime_error naming the path on failure.
+void SaveCheckpoint(const std::string& path, const CheckpointMeta& meta, Networks& nets,
+                    const Optimizers& optimizers);
+
+/// Reads only the metadata. Throws std::runtime_error if the file is missing, unreadable or of
+/// another format version (the message says which version and what to do).
+CheckpointMeta ReadCheckpointMeta(const std::string& path);
+
+/// Loads modules (and optimisers / RNG state when given / asked) into already-constructed
+/// networks built from the checkpoint's config. Returns the metadata.
+CheckpointMeta LoadCheckpoint(const std::string& path, Networks& nets,
+                              const Optimizers& optimizers, bool restore_rng);
+
+}  // namespace p2i::model

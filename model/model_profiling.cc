@@ -1,0 +1,134 @@
+/// @file model_profiling.cc
+/// @brief Benchmark helpers (see model_profiling.h).
+#include "model/model_profiling.h"
+
+#include <algorithm>
+#include <chrono>
+
+#include <torch/torch.h>
+
+#include "model/checkpoint.h"
+#include "model/losses.h"
+#include "model/networks.h"
+
+namespace p2i::model {
+
+namespace {
+using Clock = std::chrono::steady_clock;
+double Seconds(Clock::time_point a, Clock::time_point b) {
+  return std::chrono::duration<double>(b - a).count();
+}
+
+// D's forward MACs for one image (convs, attention and heads), computed from its shape.
+double DiscriminatorMacs(const P2iConfig& c) {
+  double macs = 0;
+  int cin = c.Channels(), width = c.d_base_width, side = c.resolution;
+  while (side > 4) {
+    side /= 2;
+    const double px = static_cast<double>(side) * side;
+    macs += 16.0 * cin * width * px;
+    if (c.attention && side <= c.attention_max_res) {
+      const double inner = std::max(1, width / 8);
+      macs += px * width * (2 * inner + width) + px * px * (inner + width);
+    }
+    cin = width;
+    width = std::min(width * 2, c.d_max_width);
+  }
+  macs += 9.0 * cin * c.latent_dim * 16;
+  macs += c.latent_dim + 7.0 * c.mapping_width + 2.0 * c.mapping_width * c.latent_dim + 7.0 * c.mapping_width;
+  return macs;
+}
+}  // namespace
+
+double MeasureMatmulFlopRate(int n, int threads, int reps) {
+  torch::set_num_threads(threads);
+  torch::NoGradGuard ng;
+  auto a = torch::rand({n, n}), b = torch::rand({n, n});
+  auto c = torch::mm(a, b);  // warm-up
+  double best = 1e30;
+  for (int i = 0; i < reps; ++i) {
+    const auto t0 = Clock::now();
+    c = torch::mm(a, b);
+    best = std::min(best, Seconds(t0, Clock::now()));
+  }
+  return 2.0 * n * static_cast<double>(n) * n / best;
+}
+
+double TimeTrainingStep(const P2iConfig& config, int phase, int steps, int threads) {
+  torch::set_num_threads(threads);
+  torch::manual_seed(config.seed);
+  Networks nets(config);
+  const LossWeights w = LossWeights::From(config);
+  const int b = config.batch_size, r = config.resolution;
+  auto real = torch::rand({b, config.Channels(), r, r}) * 2 - 1;
+  auto y = torch::rand({b, 7}) * 2 - 1;
+  torch::optim::Adam opt_g(nets.g->parameters(), torch::optim::AdamOptions(1e-4));
+  std::unique_ptr<torch::optim::Adam> opt_d, opt_e;
+  if (nets.d) opt_d = std::make_unique<torch::optim::Adam>(nets.d->parameters(), torch::optim::AdamOptions(1e-4));
+  if (nets.e) opt_e = std::make_unique<torch::optim::Adam>(nets.e->parameters(), torch::optim::AdamOptions(1e-4));
+  if (phase == 2 && !nets.e) return 0.0;
+  auto step = [&]() {
+    if (phase == 2) {
+      torch::Tensor gen;
+      {
+        torch::NoGradGuard ng;
+        gen = nets.g->forward(y);
+      }
+      auto l = EnetLoss(nets.e->forward(gen), real, w);
+      opt_e->zero_grad();
+      l.total.backward();
+      opt_e->step();
+    } else if (config.IsBaseline()) {
+      auto l = RegressionLoss(nets.g->forward(y), real);
+      opt_g.zero_grad();
+      l.backward();
+      opt_g.step();
+    } else {
+      auto fake = nets.g->forward(y);
+      auto dl = DiscriminatorLoss(nets.d->forward(real), nets.d->forward(fake.detach()),
+                                  nets.d->MapPose(y), y, w);
+      opt_d->zero_grad();
+      dl.total.backward();
+      opt_d->step();
+      auto gl = GeneratorLoss(nets.d->forward(fake), nets.d->MapPose(y), y, w);
+      opt_g.zero_grad();
+      gl.total.backward();
+      opt_g.step();
+    }
+  };
+  step();
+  const auto t0 = Clock::now();
+  for (int i = 0; i < steps; ++i) step();
+  return Seconds(t0, Clock::now()) / std::max(1, steps);
+}
+
+double TrainingStepFlops(const P2iConfig& config, int phase) {
+  Generator g(config);
+  const double gm = g->MacsPerView();
+  double macs = 0;
+  if (phase == 2) {
+    if (config.IsBaseline() || !config.enet) return 0;
+    Enhancer e(config);
+    macs = gm + 3.0 * e->MacsPerView();
+  } else if (config.IsBaseline()) {
+    macs = 3.0 * gm;
+  } else {
+    // G fwd+bwd once; D: real + fake fwd/bwd in the D step, fake fwd/bwd in the G step.
+    macs = 3.0 * gm + 3.0 * 3.0 * DiscriminatorMacs(config);
+  }
+  return 2.0 * macs * config.batch_size;
+}
+
+void WriteUntrainedCheckpoint(const P2iConfig& config, const std::string& path) {
+  torch::manual_seed(config.seed);
+  Networks nets(config);
+  CheckpointMeta meta;
+  meta.config = config;
+  meta.phase2_step = nets.e ? 1 : 0;
+  const double f = config.resolution * 0.9, c = (config.resolution - 1) / 2.0;
+  meta.camera.image_width = meta.camera.image_height = config.resolution;
+  meta.camera.camera_matrix = {f, 0, c, 0, f, c, 0, 0, 1};
+  SaveCheckpoint(path, meta, nets, {});
+}
+
+}  // namespace p2i::model

@@ -1,0 +1,27 @@
+/// @file model_profiling.h
+/// @brief Torch-free helpers for bench/model_bench.cc: the machine's matmul FLOP rate, the time
+/// of one training step, and an untrained checkpoint for inference timing.
+#pragma once
+
+#include <string>
+
+#include "model/p2i_config.h"
+
+namespace p2i::model {
+
+/// FLOP/s of an n x n float matmul on `threads` LibTorch threads (best of `reps`).
+double MeasureMatmulFlopRate(int n, int threads, int reps = 5);
+
+/// Mean wall time (seconds) of one training step of `phase` (1: D + G step, or the baseline's
+/// regression step; 2: ENET step) at config.batch_size on random data, after one warm-up step.
+double TimeTrainingStep(const P2iConfig& config, int phase, int steps, int threads);
+
+/// Multiply-accumulate FLOPs (2 x MACs) of one training step: forward + backward ~ 3x forward
+/// of every network the step runs, times the batch size.
+double TrainingStepFlops(const P2iConfig& config, int phase);
+
+/// Writes a freshly initialised checkpoint of `config` (phase-2 step marked done when ENET is on,
+/// so the synthesizer runs G + ENET), for timing inference.
+void WriteUntrainedCheckpoint(const P2iConfig& config, const std::string& path);
+
+}  // namespace p2i::model

@@ -1,0 +1,79 @@
+/// @file p2i_config.h
+/// @brief Configuration of a P2I-NET (or CNN-baseline) model and its training: network sizes,
+/// loss switches and weights, optimiser settings. Torch-free; read from the preset YAML files in
+/// model/presets/.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace p2i::model {
+
+/// Everything that defines a model and how it is trained. A value type (thread-compatible).
+/// Unknown YAML keys are errors. See docs/MODEL.md for how each field reads the paper.
+struct P2iConfig {
+  std::string name = "p2i_net";
+  /// "p2i_net" (adversarial, phases 1 and 2) or "cnn_baseline" (the same G trained by plain L2
+  /// regression to the image in phase 1; it has no D and no ENET).
+  std::string model = "p2i_net";
+
+  // --- sizes ---
+  int resolution = 64;     ///< square output side, a power of two in [32, 512]
+  bool depth = true;       ///< RGB-D (4 channels) when true, RGB (3) when false
+  /// "more": G widths grow geometrically from g_min_width (4x4 seed) to g_max_width (output
+  /// resolution), the paper's schedule; "fewer": g_min_width everywhere; "custom": g_widths.
+  std::string g_schedule = "custom";
+  int g_min_width = 64;
+  int g_max_width = 1024;
+  /// custom only: one width per G stage, stage 0 at 4x4 and the last at `resolution`, so
+  /// log2(resolution) - 1 entries.
+  std::vector<int> g_widths = {256, 256, 128, 64, 32};
+  int g_fc_width = 256;          ///< hidden width of the pose MLP before the 4x4 seed
+  int d_base_width = 32;         ///< D's first block width, doubling per block up to d_max_width
+  int d_max_width = 512;
+  int latent_dim = 1024;         ///< F_l size (the paper's 1024)
+  int mapping_width = 256;       ///< hidden width of M_p and M_l
+  bool attention = true;         ///< a self-attention block after each D conv block
+  int attention_max_res = 32;    ///< attention only on D feature maps up to this side (cost)
+  bool spectral_norm = true;     ///< on every conv/linear of D, M_d, M_p, M_l
+  bool enet = true;              ///< train (phase 2) and use ENET
+  int enet_width = 32;
+  int enet_blocks = 3;           ///< residual blocks
+
+  // --- losses ---
+  bool hd = true;   ///< pose consistency in latent space: the cosine term of D_pro
+  bool ld = true;   ///< pose consistency in world space: L_PE terms and G's pose term
+  double k1 = 1.0;
+  double k2 = 1.0;
+  double k3 = 1.0;
+
+  // --- optimisation ---
+  int batch_size = 16;
+  int steps_phase1 = 2000;
+  int steps_phase2 = 1000;
+  double lr_g = 2e-4;
+  double lr_d = 2e-4;
+  double lr_enet = 1e-3;
+  double beta1 = 0.0;
+  double beta2 = 0.9;
+  uint64_t seed = 1;
+  double depth_max = 10.0;     ///< metres mapped to +1; 0 m (invalid) maps to -1
+  int val_every = 200;         ///< steps between validation PSNR lines in the log
+  int checkpoint_every = 200;  ///< steps between checkpoints (also the rollback points)
+  double explode_factor = 50;  ///< a loss above factor x its running mean counts as divergence
+
+  int Channels() const { return depth ? 4 : 3; }
+  bool IsBaseline() const { return model == "cnn_baseline"; }
+  /// The G width per stage that the schedule gives (4x4 first).
+  std::vector<int> GeneratorWidths() const;
+
+  /// Throws std::invalid_argument naming the bad field and the allowed values.
+  void Validate() const;
+  /// Unknown keys are errors naming key and source. Missing keys keep their defaults.
+  static P2iConfig FromYamlString(const std::string& text, const std::string& source);
+  static P2iConfig FromYamlFile(const std::string& path);
+  std::string ToYamlString() const;
+};
+
+}  // namespace p2i::model

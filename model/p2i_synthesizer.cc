@@ -1,0 +1,134 @@
+/// @file p2i_synthesizer.cc
+/// @brief P2iSynthesizer (see p2i_synthesizer.h).
+#include "model/p2i_synthesizer.h"
+
+#include <cstring>
+#include <stdexcept>
+
+#include <torch/torch.h>
+
+#include "model/checkpoint.h"
+#include "model/networks.h"
+
+namespace p2i::model {
+
+void SynthesizerOptions::Validate() const {
+  if (threads < 1) throw std::invalid_argument("SynthesizerOptions: threads must be >= 1");
+  if (stage != "auto" && stage != "g" && stage != "g+enet")
+    throw std::invalid_argument("SynthesizerOptions: stage must be auto, g or g+enet, got '" +
+                                stage + "'");
+  if (!(min_valid_depth >= 0)) throw std::invalid_argument("SynthesizerOptions: min_valid_depth < 0");
+}
+
+struct P2iSynthesizer::Impl {
+  CheckpointMeta meta;
+  std::unique_ptr<Networks> nets;
+  bool use_enet = false;
+  SynthesizerOptions options;
+  torch::Tensor input;  // 1 x 7, reused for single renders
+  std::string path;
+
+  torch::Tensor Forward(const torch::Tensor& poses) {
+    auto out = nets->g->forward(poses);
+    if (use_enet) out = nets->e->forward(out);
+    return out.clamp(-1.0, 1.0);
+  }
+
+  void FillPose(const scene::Pose& pose, float* dst) const {
+    const auto v = pose.ToVector7();
+    const auto n = meta.normalizer.Normalize({v[0], v[1], v[2], v[3], v[4], v[5], v[6]});
+    std::memcpy(dst, n.data(), sizeof(float) * 7);
+  }
+
+  View ToView(const torch::Tensor& image, const scene::Pose& pose) const {  // C x R x R
+    const int r = meta.config.resolution;
+    View view;
+    view.pose = pose;
+    view.id = "p2i";
+    auto rgb = ((image.slice(0, 0, 3) + 1.0) * 127.5)
+                   .round()
+                   .to(torch::kUInt8)
+                   .permute({1, 2, 0})
+                   .contiguous();
+    view.rgb = cv::Mat(r, r, CV_8UC3);
+    std::memcpy(view.rgb.data, rgb.data_ptr<uint8_t>(), rgb.numel());
+    view.depth = cv::Mat(r, r, CV_32FC1, cv::Scalar(0.0f));
+    if (meta.config.depth) {
+      auto d = ((image[3] + 1.0) * 0.5 * meta.config.depth_max).contiguous();
+      d = torch::where(d < options.min_valid_depth, torch::zeros_like(d), d);
+      std::memcpy(view.depth.data, d.data_ptr<float>(), sizeof(float) * d.numel());
+    }
+    return view;
+  }
+};
+
+P2iSynthesizer::P2iSynthesizer(const std::string& checkpoint_path,
+                               const SynthesizerOptions& options)
+    : impl_(std::make_unique<Impl>()) {
+  options.Validate();
+  impl_->options = options;
+  impl_->path = checkpoint_path;
+  torch::set_num_threads(options.threads);
+  impl_->meta = ReadCheckpointMeta(checkpoint_path);
+  impl_->nets = std::make_unique<Networks>(impl_->meta.config);
+  LoadCheckpoint(checkpoint_path, *impl_->nets, {}, /*restore_rng=*/false);
+  const bool enet_trained = impl_->nets->e && impl_->meta.phase2_step > 0;
+  if (options.stage == "g+enet" && !enet_trained)
+    throw std::runtime_error("checkpoint " + checkpoint_path +
+                             " has no trained ENET (run phase 2: p2i train ... --phase 2)");
+  impl_->use_enet = options.stage == "g+enet" || (options.stage == "auto" && enet_trained);
+  impl_->nets->g->eval();
+  if (impl_->nets->e) impl_->nets->e->eval();
+  impl_->input = torch::zeros({1, 7});
+}
+
+P2iSynthesizer::~P2iSynthesizer() = default;
+
+std::string P2iSynthesizer::Name() const {
+  if (impl_->meta.config.IsBaseline()) return "cnn_baseline";
+  return impl_->use_enet ? "p2i_net" : "p2i_net_g";
+}
+
+scene::CameraInfo P2iSynthesizer::Camera() const { return impl_->meta.camera; }
+
+bool P2iSynthesizer::UsesEnet() const { return impl_->use_enet; }
+
+View P2iSynthesizer::Render(const scene::Pose& pose) {
+  c10::InferenceMode guard;
+  impl_->FillPose(pose, impl_->input.data_ptr<float>());
+  const auto out = impl_->Forward(impl_->input);
+  return impl_->ToView(out[0], pose);
+}
+
+std::vector<View> P2iSynthesizer::RenderBatch(const std::vector<scene::Pose>& poses) {
+  std::vector<View> views;
+  if (poses.empty()) return views;
+  c10::InferenceMode guard;
+  auto input = torch::empty({static_cast<int64_t>(poses.size()), 7});
+  for (size_t i = 0; i < poses.size(); ++i)
+    impl_->FillPose(poses[i], input.data_ptr<float>() + 7 * i);
+  const auto out = impl_->Forward(input);
+  views.reserve(poses.size());
+  for (size_t i = 0; i < poses.size(); ++i)
+    views.push_back(impl_->ToView(out[static_cast<int64_t>(i)], poses[i]));
+  return views;
+}
+
+int64_t P2iSynthesizer::ParameterCount() const {
+  int64_t n = CountParameters(*impl_->nets->g);
+  if (impl_->use_enet) n += CountParameters(*impl_->nets->e);
+  return n;
+}
+
+double P2iSynthesizer::FlopsPerView() const {
+  double macs = impl_->nets->g->MacsPerView();
+  if (impl_->use_enet) macs += impl_->nets->e->MacsPerView();
+  return 2.0 * macs;
+}
+
+std::unique_ptr<ViewSynthesizer> LoadSynthesizer(const std::string& checkpoint_path,
+                                                 const SynthesizerOptions& options) {
+  return std::make_unique<P2iSynthesizer>(checkpoint_path, options);
+}
+
+}  // namespace p2i::model

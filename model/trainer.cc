@@ -1,0 +1,532 @@
+/// @file trainer.cc
+/// @brief Two-phase P2I-NET training, CNN-baseline regression, checkpoints, divergence guard.
+#include "model/trainer.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <cstring>
+#include <random>
+#include <stdexcept>
+
+#include <nlohmann/json.hpp>
+#include <opencv2/imgproc.hpp>
+#include <torch/torch.h>
+
+#include "model/checkpoint.h"
+#include "model/losses.h"
+#include "model/networks.h"
+
+namespace p2i::model {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+using nlohmann::json;
+
+// Centre crop to a square, then resize to side x side.
+cv::Mat CropResize(const cv::Mat& in, int side, int interpolation) {
+  const int s = std::min(in.cols, in.rows);
+  const cv::Rect roi((in.cols - s) / 2, (in.rows - s) / 2, s, s);
+  cv::Mat out;
+  cv::resize(in(roi), out, cv::Size(side, side), 0, 0, interpolation);
+  return out;
+}
+
+// The intrinsics after CropResize.
+scene::CameraInfo SquareCamera(const scene::CameraInfo& in, int side) {
+  scene::CameraInfo c = in;
+  const int s = std::min(in.image_width, in.image_height);
+  const double x0 = (in.image_width - s) / 2, y0 = (in.image_height - s) / 2;
+  const double scale = static_cast<double>(side) / s;
+  const double fx = in.fx() * scale, fy = in.fy() * scale;
+  const double cx = (in.cx() - x0 + 0.5) * scale - 0.5, cy = (in.cy() - y0 + 0.5) * scale - 0.5;
+  c.image_width = side;
+  c.image_height = side;
+  c.camera_matrix = {fx, 0, cx, 0, fy, cy, 0, 0, 1};
+  c.projection_matrix = {fx, 0, cx, 0, 0, fy, cy, 0, 0, 0, 1, 0};
+  c.distortion_coefficients.assign(5, 0.0);
+  return c;
+}
+
+std::array<double, 7> PoseArray(const scene::Pose& p) {
+  const auto v = p.ToVector7();
+  return {v[0], v[1], v[2], v[3], v[4], v[5], v[6]};
+}
+
+// Frames -> images in [-1, 1] (N x C x R x R), normalised poses (N x 7), and the RGB ground
+// truth at the training resolution (for PSNR).
+struct Prepared {
+  torch::Tensor images;
+  torch::Tensor poses;
+  std::vector<cv::Mat> rgb;
+};
+
+Prepared Prepare(const std::vector<scene::RgbdSample>& frames, const P2iConfig& config,
+                 const PoseNormalizer& norm, size_t max_frames) {
+  const int r = config.resolution;
+  const size_t n = std::min(frames.size(), max_frames);
+  Prepared p;
+  p.images = torch::empty({static_cast<int64_t>(n), config.Channels(), r, r});
+  p.poses = torch::empty({static_cast<int64_t>(n), 7});
+  for (size_t i = 0; i < n; ++i) {
+    // Evenly spread when only a subset is used.
+    const auto& f = frames[n == frames.size() ? i : i * frames.size() / n];
+    if (f.rgb.empty() || f.rgb.type() != CV_8UC3)
+      throw std::invalid_argument("training frame '" + f.id + "' has no CV_8UC3 rgb image");
+    cv::Mat rgb = CropResize(f.rgb, r, cv::INTER_AREA);
+    p.rgb.push_back(rgb);
+    auto t = torch::from_blob(rgb.data, {r, r, 3}, torch::kUInt8).permute({2, 0, 1}).to(torch::kFloat);
+    p.images[i].slice(0, 0, 3).copy_(t / 127.5 - 1.0);
+    if (config.depth) {
+      if (f.depth.empty() || f.depth.type() != CV_32FC1)
+        throw std::invalid_argument("training frame '" + f.id +
+                                    "' has no CV_32FC1 depth image; set depth: false for RGB");
+      cv::Mat d = CropResize(f.depth, r, cv::INTER_NEAREST);
+      auto td = torch::from_blob(d.data, {r, r}, torch::kFloat).clone();
+      td = torch::nan_to_num(td, 0.0, 0.0, 0.0);
+      p.images[i][3].copy_((td / config.depth_max).clamp(0.0, 1.0) * 2.0 - 1.0);
+    }
+    const auto np = norm.Normalize(PoseArray(f.pose));
+    for (int k = 0; k < 7; ++k) p.poses[i][k] = np[k];
+  }
+  return p;
+}
+
+cv::Mat ToRgb8(const torch::Tensor& image) {  // C x R x R in [-1, 1]
+  auto t = ((image.slice(0, 0, 3).clamp(-1, 1) + 1.0) * 127.5)
+               .round()
+               .to(torch::kUInt8)
+               .permute({1, 2, 0})
+               .contiguous();
+  cv::Mat out(static_cast<int>(t.size(0)), static_cast<int>(t.size(1)), CV_8UC3);
+  std::memcpy(out.data, t.data_ptr<uint8_t>(), t.numel());
+  return out;
+}
+
+// PSNR of two 8-bit images over all channels (dB; 100 when identical).
+// TODO(model): switch to model/metrics.h once the evaluation engineer's version lands.
+double Psnr8(const cv::Mat& a, const cv::Mat& b) {
+  cv::Mat fa, fb;
+  a.convertTo(fa, CV_64F);
+  b.convertTo(fb, CV_64F);
+  cv::Mat diff = fa - fb;
+  const double mse = cv::sum(diff.mul(diff))[0] / static_cast<double>(diff.total() * diff.channels());
+  return mse <= 1e-12 ? 100.0 : 10.0 * std::log10(255.0 * 255.0 / mse);
+}
+
+std::string FormatDuration(double seconds) {
+  if (!std::isfinite(seconds) || seconds < 0) return "--:--";
+  const int s = static_cast<int>(seconds);
+  char buf[32];
+  std::snprintf(buf, sizeof(buf), "%d:%02d:%02d", s / 3600, (s / 60) % 60, s % 60);
+  return buf;
+}
+
+// Thrown inside a step when the guard sees a bad loss.
+struct Divergence {
+  std::string why;
+};
+
+class Run {
+ public:
+  Run(const P2iConfig& config, const TrainerOptions& options) : options_(options) {
+    config_ = config;
+  }
+
+  TrainReport Go(const scene::RgbdDataset& train, const scene::RgbdDataset& val);
+
+ private:
+  void ApplyLearningRates();
+  void Save();
+  void Rollback(const std::string& why);
+  void Log(const json& line);
+  void Progress(const char* phase, int step, int target, const std::string& losses);
+  double Validate(bool use_enet);
+  torch::Tensor BatchIndices(int phase, int step, int64_t n) const;
+  void CheckLoss(const torch::Tensor& loss, const char* what, int step);
+  int PhaseOne(int target);
+  int PhaseTwo(int target);
+
+  P2iConfig config_;
+  TrainerOptions options_;
+  std::string checkpoint_path_;
+  std::unique_ptr<Networks> nets_;
+  std::unique_ptr<torch::optim::Adam> opt_g_, opt_d_, opt_e_;
+  CheckpointMeta meta_;
+  Prepared train_, val_;
+  std::ofstream log_;
+  double ema_ = -1.0;
+  double last_val_psnr_ = 0.0;
+  bool injected_ = false;
+  Clock::time_point phase_start_;
+  int phase_start_step_ = 0;
+  Clock::time_point last_progress_;
+};
+
+void Run::ApplyLearningRates() {
+  auto set = [&](torch::optim::Adam* opt, double lr) {
+    if (opt == nullptr) return;
+    for (auto& group : opt->param_groups())
+      static_cast<torch::optim::AdamOptions&>(group.options()).lr(lr * meta_.lr_scale);
+  };
+  set(opt_g_.get(), config_.lr_g);
+  set(opt_d_.get(), config_.lr_d);
+  set(opt_e_.get(), config_.lr_enet);
+}
+
+void Run::Save() {
+  SaveCheckpoint(checkpoint_path_, meta_, *nets_, {opt_g_.get(), opt_d_.get(), opt_e_.get()});
+}
+
+void Run::Rollback(const std::string& why) {
+  if (meta_.rollbacks >= options_.max_rollbacks)
+    throw std::runtime_error("training diverged " + std::to_string(meta_.rollbacks + 1) +
+                             " times (" + why + "); giving up. Lower the learning rates in the "
+                             "config or check the data.");
+  const double new_scale = meta_.lr_scale * 0.5;
+  const int rollbacks = meta_.rollbacks + 1;
+  const int from1 = meta_.phase1_step, from2 = meta_.phase2_step;
+  meta_ = LoadCheckpoint(checkpoint_path_, *nets_, {opt_g_.get(), opt_d_.get(), opt_e_.get()},
+                         /*restore_rng=*/true);
+  meta_.lr_scale = new_scale;
+  meta_.rollbacks = rollbacks;
+  ApplyLearningRates();
+  ema_ = -1.0;
+  Log({{"event", "rollback"},
+       {"reason", why},
+       {"from_phase1_step", from1},
+       {"from_phase2_step", from2},
+       {"to_phase1_step", meta_.phase1_step},
+       {"to_phase2_step", meta_.phase2_step},
+       {"lr_scale", meta_.lr_scale}});
+  if (options_.progress)
+    std::fprintf(stderr, "\ndivergence (%s): rolled back to the last checkpoint, lr x%.3g\n",
+                 why.c_str(), meta_.lr_scale);
+}
+
+void Run::Log(const json& line) {
+  log_ << line.dump() << "\n";
+  log_.flush();
+}
+
+void Run::Progress(const char* phase, int step, int target, const std::string& losses) {
+  if (!options_.progress) return;
+  const auto now = Clock::now();
+  if (step != target && now - last_progress_ < std::chrono::milliseconds(250)) return;
+  last_progress_ = now;
+  const double elapsed = std::chrono::duration<double>(now - phase_start_).count();
+  const double rate = elapsed > 0 ? (step - phase_start_step_) / elapsed : 0.0;
+  const double eta = rate > 0 ? (target - step) / rate : -1.0;
+  constexpr int kBar = 24;
+  const int filled = target > 0 ? kBar * step / target : kBar;
+  std::string bar(filled, '#');
+  bar.resize(kBar, '.');
+  std::fprintf(stderr, "\r%s [%s] %d/%d %s %.2f it/s ETA %s   ", phase, bar.c_str(), step, target,
+               losses.c_str(), rate, FormatDuration(eta).c_str());
+  if (step == target) std::fprintf(stderr, "\n");
+}
+
+double Run::Validate(bool use_enet) {
+  if (val_.rgb.empty()) return 0.0;
+  torch::NoGradGuard no_grad;
+  nets_->g->eval();
+  if (use_enet) nets_->e->eval();
+  double sum = 0.0;
+  const int64_t n = val_.poses.size(0);
+  for (int64_t i = 0; i < n; i += 16) {
+    const int64_t j = std::min(n, i + 16);
+    auto out = nets_->g->forward(val_.poses.slice(0, i, j));
+    if (use_enet) out = nets_->e->forward(out);
+    for (int64_t k = i; k < j; ++k) sum += Psnr8(ToRgb8(out[k - i]), val_.rgb[k]);
+  }
+  nets_->g->train();
+  if (use_enet) nets_->e->train();
+  return sum / static_cast<double>(n);
+}
+
+torch::Tensor Run::BatchIndices(int phase, int step, int64_t n) const {
+  // A pure function of (seed, phase, step): resuming needs no sampler state.
+  std::mt19937_64 rng(config_.seed * 1000003ULL + static_cast<uint64_t>(phase) * 7919ULL +
+                      static_cast<uint64_t>(step));
+  std::uniform_int_distribution<int64_t> pick(0, n - 1);
+  std::vector<int64_t> idx(static_cast<size_t>(config_.batch_size));
+  for (auto& i : idx) i = pick(rng);
+  return torch::tensor(idx, torch::kLong);
+}
+
+void Run::CheckLoss(const torch::Tensor& loss, const char* what, int step) {
+  const double v = loss.item<double>();
+  if (!std::isfinite(v)) throw Divergence{std::string(what) + " is not finite"};
+  const double a = std::abs(v);
+  if (ema_ >= 0 && a > config_.explode_factor * std::max(ema_, 1.0))
+    throw Divergence{std::string(what) + " exploded to " + std::to_string(v)};
+}
+
+int Run::PhaseOne(int target) {
+  const LossWeights w = LossWeights::From(config_);
+  const int64_t n = train_.images.size(0);
+  phase_start_ = Clock::now();
+  phase_start_step_ = meta_.phase1_step;
+  const char* name = config_.IsBaseline() ? "cnn" : "phase1";
+  while (meta_.phase1_step < target) {
+    const int step = meta_.phase1_step;
+    const auto idx = BatchIndices(1, step, n);
+    const auto real = train_.images.index_select(0, idx);
+    const auto y = train_.poses.index_select(0, idx);
+    json line{{"phase", 1}, {"step", step + 1}};
+    std::string losses;
+    try {
+      if (config_.IsBaseline()) {
+        auto loss = RegressionLoss(nets_->g->forward(y), real);
+        if (options_.inject_nan_at_step == step && !injected_) {
+          injected_ = true;
+          loss = loss * std::nan("");
+        }
+        CheckLoss(loss, "L2 loss", step);
+        opt_g_->zero_grad();
+        loss.backward();
+        opt_g_->step();
+        const double v = loss.item<double>();
+        ema_ = ema_ < 0 ? std::abs(v) : 0.95 * ema_ + 0.05 * std::abs(v);
+        line["loss"] = v;
+        char buf[64];
+        std::snprintf(buf, sizeof(buf), "L2 %.4f", v);
+        losses = buf;
+      } else {
+        auto& g = nets_->g;
+        auto& d = nets_->d;
+        // D step on a detached fake.
+        const auto fake = g->forward(y);
+        auto mp = d->MapPose(y);
+        auto dl = DiscriminatorLoss(d->forward(real), d->forward(fake.detach()), mp, y, w);
+        if (options_.inject_nan_at_step == step && !injected_) {
+          injected_ = true;
+          dl.total = dl.total * std::nan("");
+        }
+        CheckLoss(dl.total, "L_D", step);
+        opt_d_->zero_grad();
+        dl.total.backward();
+        opt_d_->step();
+        // G step through the updated D (D's grads are discarded: only opt_g steps).
+        auto gl = GeneratorLoss(d->forward(fake), d->MapPose(y), y, w);
+        CheckLoss(gl.total, "L_G", step);
+        opt_g_->zero_grad();
+        gl.total.backward();
+        opt_g_->step();
+        const double ld = dl.total.item<double>(), lg = gl.total.item<double>();
+        const double mon = std::abs(ld) + std::abs(lg);
+        ema_ = ema_ < 0 ? mon : 0.95 * ema_ + 0.05 * mon;
+        line["loss_d"] = ld;
+        line["loss_g"] = lg;
+        line["pro"] = dl.pro.item<double>();
+        line["pe_real"] = dl.pe_real.item<double>();
+        line["pe_fake"] = dl.pe_fake.item<double>();
+        line["g_adv"] = gl.adv.item<double>();
+        line["g_pose"] = gl.pose.item<double>();
+        char buf[96];
+        std::snprintf(buf, sizeof(buf), "L_D %.3f L_G %.3f", ld, lg);
+        losses = buf;
+      }
+    } catch (const Divergence& div) {
+      Rollback(div.why);
+      continue;
+    }
+    meta_.phase1_step = step + 1;
+    const int s = meta_.phase1_step;
+    if (s % 10 == 0 || s == target) Log(line);
+    if (s % config_.val_every == 0 || s == target) {
+      const double psnr = Validate(false);
+      Log({{"phase", 1}, {"step", s}, {"val_psnr", psnr}});
+      last_val_psnr_ = psnr;
+    }
+    if (s % config_.checkpoint_every == 0 || s == target) Save();
+    Progress(name, s, target, losses);
+  }
+  return meta_.phase1_step;
+}
+
+int Run::PhaseTwo(int target) {
+  const LossWeights w = LossWeights::From(config_);
+  const int64_t n = train_.images.size(0);
+  nets_->g->eval();
+  for (auto& p : nets_->g->parameters()) p.set_requires_grad(false);
+  phase_start_ = Clock::now();
+  phase_start_step_ = meta_.phase2_step;
+  ema_ = -1.0;
+  while (meta_.phase2_step < target) {
+    const int step = meta_.phase2_step;
+    const auto idx = BatchIndices(2, step, n);
+    const auto real = train_.images.index_select(0, idx);
+    const auto y = train_.poses.index_select(0, idx);
+    torch::Tensor generated;
+    {
+      torch::NoGradGuard no_grad;
+      generated = nets_->g->forward(y);
+    }
+    json line{{"phase", 2}, {"step", step + 1}};
+    std::string losses;
+    try {
+      auto el = EnetLoss(nets_->e->forward(generated), real, w);
+      CheckLoss(el.total, "L_ENET", step);
+      opt_e_->zero_grad();
+      el.total.backward();
+      opt_e_->step();
+      const double v = el.total.item<double>();
+      ema_ = ema_ < 0 ? std::abs(v) : 0.95 * ema_ + 0.05 * std::abs(v);
+      line["loss_enet"] = v;
+      line["pixel"] = el.pixel.item<double>();
+      line["edge"] = el.edge.item<double>();
+      char buf[64];
+      std::snprintf(buf, sizeof(buf), "L_ENET %.3f", v);
+      losses = buf;
+    } catch (const Divergence& div) {
+      Rollback(div.why);
+      continue;
+    }
+    meta_.phase2_step = step + 1;
+    const int s = meta_.phase2_step;
+    if (s % 10 == 0 || s == target) Log(line);
+    if (s % config_.val_every == 0 || s == target) {
+      const double psnr = Validate(true);
+      Log({{"phase", 2}, {"step", s}, {"val_psnr", psnr}});
+      last_val_psnr_ = psnr;
+    }
+    if (s % config_.checkpoint_every == 0 || s == target) Save();
+    Progress("phase2", s, target, losses);
+  }
+  for (auto& p : nets_->g->parameters()) p.set_requires_grad(true);
+  nets_->g->train();
+  return meta_.phase2_step;
+}
+
+}  // namespace
+
+void TrainerOptions::Validate() const {
+  if (out_dir.empty()) throw std::invalid_argument("TrainerOptions: out_dir is empty");
+  if (phase < 0 || phase > 2) throw std::invalid_argument("TrainerOptions: phase must be 0, 1 or 2");
+  if (threads < 1) throw std::invalid_argument("TrainerOptions: threads must be >= 1");
+  if (max_val_frames < 1) throw std::invalid_argument("TrainerOptions: max_val_frames must be >= 1");
+  if (max_rollbacks < 0) throw std::invalid_argument("TrainerOptions: max_rollbacks must be >= 0");
+}
+
+Trainer::Trainer(P2iConfig config, TrainerOptions options)
+    : config_(std::move(config)), options_(std::move(options)) {
+  config_.Validate();
+  options_.Validate();
+}
+
+Trainer::~Trainer() = default;
+
+std::string Trainer::CheckpointPath(const std::string& out_dir) {
+  return out_dir + "/checkpoint.pt";
+}
+
+TrainReport Trainer::Run(const scene::RgbdDataset& train, const scene::RgbdDataset& val) {
+  class Run run(config_, options_);
+  return run.Go(train, val);
+}
+
+TrainReport Run::Go(const scene::RgbdDataset& train, const scene::RgbdDataset& val) {
+  if (train.frames.size() < 2)
+    throw std::invalid_argument("training needs at least 2 frames, got " +
+                                std::to_string(train.frames.size()));
+  std::filesystem::create_directories(options_.out_dir);
+  torch::set_num_threads(options_.threads);
+  checkpoint_path_ = Trainer::CheckpointPath(options_.out_dir);
+  const bool load = options_.resume || options_.phase == 2;
+  if (load && !std::filesystem::exists(checkpoint_path_))
+    throw std::runtime_error(std::string(options_.resume ? "--resume" : "phase 2") + " needs " +
+                             checkpoint_path_ + ", which does not exist: run phase 1 first");
+  if (options_.phase == 2 && (config_.IsBaseline() || !config_.enet))
+    throw std::invalid_argument("phase 2 trains ENET, but config '" + config_.name +
+                                "' has none (cnn_baseline or enet: false)");
+  P2iConfig schedule = config_;  // steps, logging cadence: from the given config
+  if (load) {
+    const CheckpointMeta on_disk = ReadCheckpointMeta(checkpoint_path_);
+    if (on_disk.config.resolution != config_.resolution ||
+        on_disk.config.Channels() != config_.Channels() || on_disk.config.model != config_.model ||
+        on_disk.config.GeneratorWidths() != config_.GeneratorWidths())
+      throw std::runtime_error("checkpoint " + checkpoint_path_ + " was trained with config '" +
+                               on_disk.config.name + "' of another shape (resolution, channels, "
+                               "model or G widths differ from '" + config_.name + "')");
+    config_ = on_disk.config;
+    config_.steps_phase1 = schedule.steps_phase1;
+    config_.steps_phase2 = schedule.steps_phase2;
+    config_.val_every = schedule.val_every;
+    config_.checkpoint_every = schedule.checkpoint_every;
+  }
+  torch::manual_seed(config_.seed);
+  nets_ = std::make_unique<Networks>(config_);
+  const auto adam = [&](double lr) {
+    return torch::optim::AdamOptions(lr).betas({config_.beta1, config_.beta2});
+  };
+  opt_g_ = std::make_unique<torch::optim::Adam>(nets_->g->parameters(), adam(config_.lr_g));
+  if (nets_->d)
+    opt_d_ = std::make_unique<torch::optim::Adam>(nets_->d->parameters(), adam(config_.lr_d));
+  if (nets_->e)
+    opt_e_ = std::make_unique<torch::optim::Adam>(nets_->e->parameters(), adam(config_.lr_enet));
+  if (load) {
+    meta_ = LoadCheckpoint(checkpoint_path_, *nets_, {opt_g_.get(), opt_d_.get(), opt_e_.get()},
+                           /*restore_rng=*/true);
+    meta_.config = config_;
+  } else {
+    meta_.config = config_;
+    std::vector<std::array<double, 7>> poses;
+    for (const auto& f : train.frames) poses.push_back(PoseArray(f.pose));
+    meta_.normalizer = PoseNormalizer::FromPoses(poses);
+    meta_.camera = SquareCamera(train.camera, config_.resolution);
+  }
+  ApplyLearningRates();
+  train_ = Prepare(train.frames, config_, meta_.normalizer, train.frames.size());
+  val_ = Prepare(val.frames, config_, meta_.normalizer, static_cast<size_t>(options_.max_val_frames));
+
+  log_.open(options_.out_dir + "/train_log.jsonl", std::ios::app);
+  if (!log_) throw std::runtime_error("cannot open " + options_.out_dir + "/train_log.jsonl");
+
+  TrainReport report;
+  // Mean training image as a predictor: the floor a model must beat.
+  if (!val_.rgb.empty()) {
+    cv::Mat sum = cv::Mat::zeros(config_.resolution, config_.resolution, CV_64FC3);
+    for (const auto& m : train_.rgb) cv::accumulate(m, sum);
+    cv::Mat mean;
+    sum.convertTo(mean, CV_8UC3, 1.0 / train_.rgb.size());
+    double s = 0;
+    for (const auto& m : val_.rgb) s += Psnr8(mean, m);
+    report.mean_image_val_psnr = s / val_.rgb.size();
+  }
+  Log({{"event", "start"},
+       {"config", config_.name},
+       {"model", config_.model},
+       {"resume", load},
+       {"phase1_step", meta_.phase1_step},
+       {"phase2_step", meta_.phase2_step},
+       {"train_frames", train.frames.size()},
+       {"val_frames", val_.rgb.size()},
+       {"threads", options_.threads},
+       {"mean_image_val_psnr", report.mean_image_val_psnr}});
+  Save();  // the first rollback point
+
+  const bool run1 = options_.phase != 2;
+  const bool run2 = options_.phase != 1 && !config_.IsBaseline() && config_.enet;
+  if (run1) PhaseOne(options_.steps >= 0 ? options_.steps : config_.steps_phase1);
+  if (run2) PhaseTwo(options_.steps >= 0 ? options_.steps : config_.steps_phase2);
+  Save();
+  Log({{"event", "end"},
+       {"phase1_step", meta_.phase1_step},
+       {"phase2_step", meta_.phase2_step},
+       {"rollbacks", meta_.rollbacks},
+       {"val_psnr", last_val_psnr_}});
+  report.phase1_steps = meta_.phase1_step;
+  report.phase2_steps = meta_.phase2_step;
+  report.rollbacks = meta_.rollbacks;
+  report.val_psnr = last_val_psnr_;
+  report.checkpoint_path = checkpoint_path_;
+  report.log_path = options_.out_dir + "/train_log.jsonl";
+  return report;
+}
+
+}  // namespace p2i::model

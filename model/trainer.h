@@ -1,0 +1,67 @@
+/// @file trainer.h
+/// @brief Two-phase P2I-NET training (phase 1: G and D adversarial; phase 2: ENET with G frozen)
+/// and the CNN baseline's L2 regression, with checkpoints, exact resume, a divergence guard,
+/// a terminal progress bar and a JSON-lines log. Torch-free header (the trainer node and the
+/// `p2i train` tool use it).
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include "model/p2i_config.h"
+#include "scene/rgbd_sample.h"
+
+namespace p2i::model {
+
+/// How one training run is carried out (the model itself is in P2iConfig).
+struct TrainerOptions {
+  std::string out_dir;      ///< checkpoint.pt and train_log.jsonl go here (created if needed)
+  int phase = 0;            ///< 0 = phase 1 then 2, 1 = phase 1 only, 2 = phase 2 only
+  int steps = -1;           ///< >= 0: run to this many steps in each phase run (else the config's)
+  int threads = 2;          ///< torch::set_num_threads
+  bool resume = false;      ///< continue from out_dir/checkpoint.pt exactly
+  bool progress = true;     ///< progress bar on stderr
+  int max_val_frames = 32;  ///< held-out frames used for the validation PSNR
+  int max_rollbacks = 5;    ///< divergence-guard rollbacks before giving up
+  /// Fault injection for tests: poison the phase-1 loss with NaN once at this step (-1 = never).
+  int inject_nan_at_step = -1;
+
+  void Validate() const;
+};
+
+/// What a run ended with.
+struct TrainReport {
+  int phase1_steps = 0;
+  int phase2_steps = 0;
+  int rollbacks = 0;
+  double val_psnr = 0.0;              ///< last validation PSNR (dB, RGB), 0 if none
+  double mean_image_val_psnr = 0.0;   ///< PSNR of predicting the mean training image
+  std::string checkpoint_path;
+  std::string log_path;
+};
+
+/// Trains one model. Run() is blocking and single-threaded from the caller's side (LibTorch uses
+/// `threads` worker threads). Not thread-safe; one Run per instance at a time. Throws
+/// std::invalid_argument on bad options/data and std::runtime_error on IO or unrecoverable
+/// divergence.
+class Trainer {
+ public:
+  Trainer(P2iConfig config, TrainerOptions options);
+  ~Trainer();
+
+  /// `train` and `val` frames of any size (centre-cropped and resized to the config's
+  /// resolution); `val` may be empty (no validation PSNR then).
+  TrainReport Run(const scene::RgbdDataset& train, const scene::RgbdDataset& val);
+
+  static std::string CheckpointPath(const std::string& out_dir);
+
+ private:
+  P2iConfig config_;
+  TrainerOptions options_;
+};
+
+/// A procedural RGB-D scene for tests and `--data procedural`: a textured room seen from poses
+/// along a smooth loop, rendered analytically at `size` x `size` (no external renderer).
+scene::RgbdDataset MakeProceduralDataset(int num_frames, int size, uint64_t seed = 0);
+
+}  // namespace p2i::model

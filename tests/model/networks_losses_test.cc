@@ -1,0 +1,230 @@
+/// @file networks_losses_test.cc
+/// @brief Shapes of G/D/ENET for several configs, spectral normalisation, and every P2I-NET loss
+/// on hand-made tensors (values, gradient flow, switches).
+#include <catch2/catch.hpp>
+#include <torch/torch.h>
+
+#include "model/losses.h"
+#include "model/networks.h"
+
+using namespace p2i::model;
+
+namespace {
+
+P2iConfig Tiny(int res, bool depth, const std::string& schedule) {
+  P2iConfig c;
+  c.resolution = res;
+  c.depth = depth;
+  c.g_schedule = schedule;
+  c.g_min_width = 8;
+  c.g_max_width = 32;
+  c.g_widths.assign(static_cast<size_t>(std::log2(res) - 1), 8);
+  c.g_fc_width = 16;
+  c.d_base_width = 8;
+  c.d_max_width = 16;
+  c.latent_dim = 32;
+  c.mapping_width = 16;
+  c.enet_width = 8;
+  c.enet_blocks = 1;
+  c.Validate();
+  return c;
+}
+
+torch::Tensor Leaf(std::vector<float> v, std::vector<int64_t> shape) {
+  return torch::tensor(v).reshape(shape).set_requires_grad(true);
+}
+
+}  // namespace
+
+TEST_CASE("G, D and ENET produce the configured shapes", "[unit]") {
+  for (int res : {32, 64}) {
+    for (bool depth : {true, false}) {
+      for (std::string schedule : {"more", "fewer", "custom"}) {
+        const auto c = Tiny(res, depth, schedule);
+        Generator g(c);
+        Discriminator d(c);
+        Enhancer e(c);
+        auto img = g->forward(torch::zeros({2, 7}));
+        REQUIRE(img.sizes() == torch::IntArrayRef({2, c.Channels(), res, res}));
+        CHECK(img.abs().max().item<float>() <= 1.0f);
+        auto out = d->forward(img);
+        CHECK(out.latent.sizes() == torch::IntArrayRef({2, 32}));
+        CHECK(out.score.sizes() == torch::IntArrayRef({2}));
+        CHECK(out.pose.sizes() == torch::IntArrayRef({2, 7}));
+        CHECK(d->MapPose(torch::zeros({2, 7})).sizes() == torch::IntArrayRef({2, 32}));
+        CHECK(e->forward(img).sizes() == img.sizes());
+        CHECK(g->MacsPerView() > 0);
+      }
+    }
+  }
+}
+
+TEST_CASE("the 'more' schedule grows from min to max width, 'fewer' is flat", "[unit]") {
+  P2iConfig c;
+  c.resolution = 256;
+  c.g_schedule = "more";
+  const auto more = c.GeneratorWidths();
+  REQUIRE(more.size() == 7);
+  CHECK(more.front() == 64);
+  CHECK(more.back() == 1024);
+  for (size_t i = 1; i < more.size(); ++i) CHECK(more[i] > more[i - 1]);
+  c.g_schedule = "fewer";
+  for (int w : c.GeneratorWidths()) CHECK(w == 64);
+}
+
+TEST_CASE("ENET starts as the identity and attention starts as the identity", "[unit]") {
+  const auto c = Tiny(32, true, "custom");
+  Enhancer e(c);
+  auto x = torch::rand({1, 4, 32, 32}) * 2 - 1;
+  CHECK(torch::allclose(e->forward(x), x));
+  SelfAttention a(16, true);
+  auto f = torch::randn({2, 16, 4, 4});
+  CHECK(torch::allclose(a->forward(f), f));
+  {
+    torch::NoGradGuard ng;
+    a->gamma.fill_(1.0);
+  }
+  CHECK_FALSE(torch::allclose(a->forward(f), f));
+}
+
+TEST_CASE("spectral normalisation bounds the largest singular value by 1", "[unit]") {
+  torch::manual_seed(3);
+  SNLinear lin(20, 30, true);
+  {
+    torch::NoGradGuard ng;
+    lin->weight.mul_(10.0);
+  }
+  for (int i = 0; i < 50; ++i) lin->forward(torch::zeros({1, 20}));  // power iterations
+  const auto w = lin->EffectiveWeight().detach();
+  const auto s = std::get<1>(torch::svd(w));
+  CHECK(s.max().item<double>() == Approx(1.0).epsilon(0.02));
+  SNLinear plain(20, 30, false);
+  {
+    torch::NoGradGuard ng;
+    plain->weight.mul_(10.0);
+  }
+  CHECK(std::get<1>(torch::svd(plain->EffectiveWeight().detach())).max().item<double>() > 2.0);
+}
+
+TEST_CASE("D_pro adds k1 * cosine only with HD", "[unit]") {
+  DOutput d;
+  d.latent = torch::tensor({1.0f, 0.0f, 0.0f, 1.0f}).reshape({2, 2});
+  d.score = torch::tensor({0.5f, -0.5f});
+  const auto mp = torch::tensor({1.0f, 0.0f, 1.0f, 0.0f}).reshape({2, 2});  // cos = 1, 0
+  LossWeights w;
+  w.k1 = 2.0;
+  auto s = ProjectionScore(d, mp, w);
+  CHECK(s[0].item<float>() == Approx(2.5));
+  CHECK(s[1].item<float>() == Approx(-0.5));
+  w.hd = false;
+  s = ProjectionScore(d, mp, w);
+  CHECK(s[0].item<float>() == Approx(0.5));
+}
+
+TEST_CASE("L_D: hinge, L_PE terms with a detached gamma, LD switch", "[unit]") {
+  // One sample. real: score 0.2, pose (3,4,0...) -> ||M_l(F_l(I_r))|| = 5
+  DOutput real, fake;
+  real.latent = Leaf({1, 0}, {1, 2});
+  real.score = Leaf({0.2f}, {1});
+  real.pose = Leaf({3, 4, 0, 0, 0, 0, 0}, {1, 7});
+  fake.latent = Leaf({0, 1}, {1, 2});
+  fake.score = Leaf({0.1f}, {1});
+  fake.pose = Leaf({3, 4, 2, 0, 0, 0, 0}, {1, 7});  // ||fake - real|| = 2
+  const auto mp = Leaf({1, 0}, {1, 2});             // cos(real) = 1, cos(fake) = 0
+  const auto y = torch::tensor({3.f, 4.f, 0.f, 0.f, 0.f, 0.f, 1.f}).reshape({1, 7});  // L_PE-Ir = 1
+  LossWeights w;
+  w.k1 = 1.0;
+  w.k2 = 0.5;
+  auto t = DiscriminatorLoss(real, fake, mp, y, w);
+  // D_pro real = 0.2 + 1 = 1.2 -> relu(1 - 1.2) = 0; fake = 0.1 -> relu(1.1) = 1.1
+  CHECK(t.pro.item<float>() == Approx(1.1));
+  CHECK(t.pe_real.item<float>() == Approx(1.0));
+  // gamma = |0.2 - 0.1| * 5 = 0.5 ; L_PE-Ig = max(2 - 0.5, 0) = 1.5
+  CHECK(t.gamma.item<float>() == Approx(0.5));
+  CHECK(t.pe_fake.item<float>() == Approx(1.5));
+  CHECK(t.total.item<float>() == Approx(1.1 + 0.5 * (1.0 + 1.5)));
+  CHECK_FALSE(t.gamma.requires_grad());
+  t.total.backward();
+  // Scores get gradient only through the hinge: d/d fake.score = +1 (through hinge), and
+  // NOT through gamma (which would add -k2 * 5 * sign). real.score is in the flat hinge part.
+  CHECK(fake.score.grad().item<float>() == Approx(1.0));
+  CHECK(real.score.grad().item<float>() == Approx(0.0));
+  REQUIRE(fake.pose.grad().defined());
+  CHECK(fake.pose.grad().abs().sum().item<float>() > 0);
+  // LD off: the PE terms vanish from the total.
+  w.ld = false;
+  auto t2 = DiscriminatorLoss(real, fake, mp, y, w);
+  CHECK(t2.total.item<float>() == Approx(1.1));
+  // HD off: the cosine leaves D_pro: real 0.2 -> relu(0.8) = 0.8
+  w.hd = false;
+  auto t3 = DiscriminatorLoss(real, fake, mp, y, w);
+  CHECK(t3.pro.item<float>() == Approx(0.8 + 1.1));
+}
+
+TEST_CASE("L_PE-Ig is zero inside the gamma tolerance", "[unit]") {
+  DOutput real, fake;
+  real.latent = Leaf({1, 0}, {1, 2});
+  real.score = Leaf({1.0f}, {1});
+  real.pose = Leaf({3, 4, 0, 0, 0, 0, 0}, {1, 7});
+  fake.latent = Leaf({0, 1}, {1, 2});
+  fake.score = Leaf({0.0f}, {1});                    // gamma = 1 * 5 = 5
+  fake.pose = Leaf({3, 4, 2, 0, 0, 0, 0}, {1, 7});  // distance 2 < 5
+  auto t = DiscriminatorLoss(real, fake, Leaf({1, 0}, {1, 2}), torch::zeros({1, 7}), LossWeights{});
+  CHECK(t.pe_fake.item<float>() == Approx(0.0));
+}
+
+TEST_CASE("L_G = -D_pro(I_g) + pose error; the pose term only with LD", "[unit]") {
+  DOutput fake;
+  fake.latent = Leaf({1, 0}, {1, 2});
+  fake.score = Leaf({0.3f}, {1});
+  fake.pose = Leaf({0, 0, 0, 0, 0, 0, 0}, {1, 7});
+  const auto mp = torch::tensor({0.f, 1.f}).reshape({1, 2});  // cos 0
+  const auto y = torch::tensor({0.f, 0.f, 2.f, 0.f, 0.f, 0.f, 0.f}).reshape({1, 7});
+  LossWeights w;
+  auto t = GeneratorLoss(fake, mp, y, w);
+  CHECK(t.total.item<float>() == Approx(-0.3 + 2.0));
+  t.total.backward();
+  CHECK(fake.score.grad().item<float>() == Approx(-1.0));
+  CHECK(fake.pose.grad()[0][2].item<float>() == Approx(-1.0));
+  w.ld = false;
+  CHECK(GeneratorLoss(fake, mp, y, w).total.item<float>() == Approx(-0.3));
+}
+
+TEST_CASE("Roberts cross and the ENET loss", "[unit]") {
+  // 1 x 1 x 2 x 2 image [[1, 2], [3, 5]] -> a - d = 1 - 5 = -4, b - c = 2 - 3 = -1
+  auto img = torch::tensor({1.f, 2.f, 3.f, 5.f}).reshape({1, 1, 2, 2});
+  auto r = Roberts(img);
+  REQUIRE(r.sizes() == torch::IntArrayRef({1, 2, 1, 1}));
+  CHECK(r[0][0][0][0].item<float>() == Approx(-4));
+  CHECK(r[0][1][0][0].item<float>() == Approx(-1));
+  auto real = torch::zeros({1, 1, 2, 2});
+  auto e = img.clone().set_requires_grad(true);
+  LossWeights w;
+  w.k3 = 2.0;
+  auto t = EnetLoss(e, real, w);
+  const double pixel = std::sqrt(1 + 4 + 9 + 25.0), edge = std::sqrt(16 + 1.0);
+  CHECK(t.pixel.item<float>() == Approx(pixel));
+  CHECK(t.edge.item<float>() == Approx(edge));
+  CHECK(t.total.item<float>() == Approx(pixel + 2 * edge));
+  t.total.backward();
+  CHECK(e.grad().abs().sum().item<float>() > 0);
+}
+
+TEST_CASE("phase 2: ENET trains while the frozen G gets no gradient", "[unit]") {
+  const auto c = Tiny(32, true, "custom");
+  Generator g(c);
+  Enhancer e(c);
+  for (auto& p : g->parameters()) p.set_requires_grad(false);
+  torch::Tensor gen;
+  {
+    torch::NoGradGuard ng;
+    gen = g->forward(torch::zeros({2, 7}));
+  }
+  auto t = EnetLoss(e->forward(gen), torch::zeros_like(gen), LossWeights{});
+  t.total.backward();
+  for (const auto& p : g->parameters()) CHECK_FALSE(p.grad().defined());
+  double enet_grad = 0;
+  for (const auto& p : e->parameters())
+    if (p.grad().defined()) enet_grad += p.grad().abs().sum().item<double>();
+  CHECK(enet_grad > 0);
+}

@@ -1,0 +1,52 @@
+/// @file presets_test.cc
+/// @brief Every shipped preset parses and validates; the ablation presets set the paper's switches;
+/// unknown keys are errors naming key and file.
+#include <filesystem>
+
+#include <catch2/catch.hpp>
+
+#include "model/p2i_config.h"
+#include "tests/test_paths.h"
+
+using p2i::model::P2iConfig;
+
+TEST_CASE("every preset in model/presets parses and validates", "[unit]") {
+  const auto dir = p2i::testing::SourceDir() + "/model/presets";
+  int n = 0;
+  for (const auto& e : std::filesystem::directory_iterator(dir)) {
+    if (e.path().extension() != ".yaml") continue;
+    INFO(e.path());
+    const auto c = P2iConfig::FromYamlFile(e.path().string());
+    CHECK(c.name == e.path().stem().string());
+    ++n;
+  }
+  CHECK(n >= 11);  // 8 ablation rows + cnn_baseline + default + default_256
+  const auto row1 = P2iConfig::FromYamlFile(dir + "/ablation_row1_minimal.yaml");
+  CHECK_FALSE(row1.depth);
+  CHECK_FALSE(row1.attention);
+  CHECK_FALSE(row1.hd);
+  CHECK_FALSE(row1.ld);
+  CHECK_FALSE(row1.enet);
+  CHECK(row1.g_schedule == "fewer");
+  const auto row8 = P2iConfig::FromYamlFile(dir + "/ablation_row8_full.yaml");
+  CHECK(row8.depth);
+  CHECK(row8.attention);
+  CHECK(row8.hd);
+  CHECK(row8.ld);
+  CHECK(row8.enet);
+  CHECK(row8.GeneratorWidths().back() == 1024);
+  CHECK(P2iConfig::FromYamlFile(dir + "/cnn_baseline.yaml").IsBaseline());
+}
+
+TEST_CASE("config YAML: unknown keys and bad values are errors naming them", "[unit]") {
+  CHECK_THROWS_WITH(P2iConfig::FromYamlString("resolutoin: 64\n", "x.yaml"),
+                    Catch::Contains("unknown key 'resolutoin'") && Catch::Contains("x.yaml"));
+  CHECK_THROWS_WITH(P2iConfig::FromYamlString("resolution: 100\n", "x.yaml"),
+                    Catch::Contains("resolution"));
+  CHECK_THROWS_WITH(P2iConfig::FromYamlString("resolution: 64\ng_widths: [8, 8]\n", "x.yaml"),
+                    Catch::Contains("g_widths"));
+  const auto c = P2iConfig::FromYamlString("resolution: 32\ng_widths: [8, 8, 8, 8]\nk1: 0.5\n", "x");
+  const auto back = P2iConfig::FromYamlString(c.ToYamlString(), "round trip");
+  CHECK(back.ToYamlString() == c.ToYamlString());
+  CHECK(back.k1 == 0.5);
+}

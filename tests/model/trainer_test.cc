@@ -1,0 +1,288 @@
+/// @file trainer_test.cc
+/// @brief Checkpoints (round trip, version refusal, atomic write), exact resume, the divergence
+/// guard, the synthesizer, and a short end-to-end training run on procedural frames.
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include <catch2/catch.hpp>
+#include <torch/torch.h>
+
+#include "model/checkpoint.h"
+#include "model/p2i_synthesizer.h"
+#include "model/trainer.h"
+
+namespace fs = std::filesystem;
+using namespace p2i::model;
+
+namespace {
+
+std::string TempDir(const std::string& name) {
+  const auto dir = fs::temp_directory_path() / ("p2i_model_test_" + name + "_" +
+                                                std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir.string();
+}
+
+P2iConfig TinyConfig() {
+  P2iConfig c;
+  c.name = "tiny";
+  c.resolution = 32;
+  c.g_schedule = "custom";
+  c.g_widths = {16, 16, 8, 8};
+  c.g_fc_width = 16;
+  c.d_base_width = 8;
+  c.d_max_width = 16;
+  c.latent_dim = 32;
+  c.mapping_width = 16;
+  c.enet_width = 8;
+  c.enet_blocks = 1;
+  c.batch_size = 4;
+  c.val_every = 5;
+  c.checkpoint_every = 3;
+  c.Validate();
+  return c;
+}
+
+TrainerOptions Quiet(const std::string& dir, int steps, int phase = 1) {
+  TrainerOptions o;
+  o.out_dir = dir;
+  o.steps = steps;
+  o.phase = phase;
+  o.threads = 1;
+  o.progress = false;
+  o.max_val_frames = 4;
+  return o;
+}
+
+bool SameParameters(torch::nn::Module& a, torch::nn::Module& b) {
+  auto pa = a.named_parameters(), pb = b.named_parameters();
+  if (pa.size() != pb.size()) return false;
+  for (const auto& kv : pa)
+    if (!torch::equal(kv.value(), pb[kv.key()])) return false;
+  auto ba = a.named_buffers(), bb = b.named_buffers();
+  for (const auto& kv : ba)
+    if (!torch::equal(kv.value(), bb[kv.key()])) return false;
+  return true;
+}
+
+std::string ReadAll(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+}  // namespace
+
+TEST_CASE("checkpoint round trip keeps weights and metadata", "[unit]") {
+  const auto dir = TempDir("roundtrip");
+  const auto c = TinyConfig();
+  torch::manual_seed(1);
+  Networks a(c);
+  CheckpointMeta meta;
+  meta.config = c;
+  meta.normalizer.t_min = {-1.5, 0.25, 2};
+  meta.normalizer.t_max = {3, 4, 5};
+  meta.phase1_step = 17;
+  meta.phase2_step = 4;
+  meta.lr_scale = 0.25;
+  meta.camera.image_width = 32;
+  meta.camera.image_height = 32;
+  meta.camera.camera_matrix = {20, 0, 15.5, 0, 21, 15.5, 0, 0, 1};
+  SaveCheckpoint(dir + "/c.pt", meta, a, {});
+  torch::manual_seed(2);
+  Networks b(c);
+  CHECK_FALSE(SameParameters(*a.g, *b.g));
+  const auto loaded = LoadCheckpoint(dir + "/c.pt", b, {}, false);
+  CHECK(SameParameters(*a.g, *b.g));
+  CHECK(SameParameters(*a.d, *b.d));
+  CHECK(SameParameters(*a.e, *b.e));
+  CHECK(loaded.phase1_step == 17);
+  CHECK(loaded.phase2_step == 4);
+  CHECK(loaded.lr_scale == 0.25);
+  CHECK(loaded.normalizer.t_min[0] == -1.5);
+  CHECK(loaded.normalizer.t_max[2] == 5);
+  CHECK(loaded.camera.fy() == 21);
+  CHECK(loaded.config.ToYamlString() == c.ToYamlString());
+  fs::remove_all(dir);
+}
+
+TEST_CASE("a checkpoint of another format version is refused with a clear message", "[unit]") {
+  const auto dir = TempDir("version");
+  const auto c = TinyConfig();
+  Networks a(c);
+  CheckpointMeta meta;
+  meta.config = c;
+  meta.format_version = kCheckpointFormatVersion + 1;
+  SaveCheckpoint(dir + "/c.pt", meta, a, {});
+  CHECK_THROWS_WITH(ReadCheckpointMeta(dir + "/c.pt"),
+                    Catch::Contains("format version " + std::to_string(kCheckpointFormatVersion + 1)) &&
+                        Catch::Contains("this build reads version"));
+  CHECK_THROWS_WITH(LoadSynthesizer(dir + "/c.pt"), Catch::Contains("format version"));
+  CHECK_THROWS_WITH(ReadCheckpointMeta(dir + "/missing.pt"), Catch::Contains("does not exist"));
+  fs::remove_all(dir);
+}
+
+TEST_CASE("atomic write: a failed write leaves the old file and no temporary", "[unit]") {
+  const auto dir = TempDir("atomic");
+  const std::string path = dir + "/file.bin";
+  WriteFileAtomically(path, [](const std::string& tmp) { std::ofstream(tmp) << "old"; });
+  CHECK(ReadAll(path) == "old");
+  CHECK_THROWS_WITH(WriteFileAtomically(path,
+                                        [](const std::string& tmp) {
+                                          std::ofstream(tmp) << "half-writ";
+                                          throw std::runtime_error("disk full");
+                                        }),
+                    Catch::Contains("disk full"));
+  CHECK(ReadAll(path) == "old");
+  int files = 0;
+  for (const auto& e : fs::directory_iterator(dir)) {
+    (void)e;
+    ++files;
+  }
+  CHECK(files == 1);
+  // A real checkpoint write leaves only the checkpoint.
+  const auto c = TinyConfig();
+  Networks n(c);
+  CheckpointMeta meta;
+  meta.config = c;
+  SaveCheckpoint(dir + "/c.pt", meta, n, {});
+  files = 0;
+  for (const auto& e : fs::directory_iterator(dir)) files += e.path().string().find(".tmp") == std::string::npos ? 1 : 100;
+  CHECK(files == 2);
+  fs::remove_all(dir);
+}
+
+TEST_CASE("resume after K steps equals an unbroken run of 2K steps", "[unit]") {
+  const auto data = MakeProceduralDataset(12, 32);
+  REQUIRE(data.frames.size() == 12);
+  const auto c = TinyConfig();
+  const auto dir_a = TempDir("resume_a"), dir_b = TempDir("resume_b");
+  Trainer(c, Quiet(dir_a, 8)).Run(data, data);
+  Trainer(c, Quiet(dir_b, 4)).Run(data, data);
+  auto resume = Quiet(dir_b, 8);
+  resume.resume = true;
+  const auto report = Trainer(c, resume).Run(data, data);
+  CHECK(report.phase1_steps == 8);
+  Networks a(c), b(c);
+  const auto ma = LoadCheckpoint(Trainer::CheckpointPath(dir_a), a, {}, false);
+  const auto mb = LoadCheckpoint(Trainer::CheckpointPath(dir_b), b, {}, false);
+  CHECK(ma.phase1_step == 8);
+  CHECK(mb.phase1_step == 8);
+  CHECK(SameParameters(*a.g, *b.g));
+  CHECK(SameParameters(*a.d, *b.d));
+  // And training really changed the weights (the test is not comparing two untouched nets).
+  torch::manual_seed(c.seed);
+  Networks fresh(c);
+  CHECK_FALSE(SameParameters(*a.g, *fresh.g));
+  fs::remove_all(dir_a);
+  fs::remove_all(dir_b);
+}
+
+TEST_CASE("the divergence guard rolls back on an injected NaN and lowers the LR", "[unit]") {
+  const auto data = MakeProceduralDataset(12, 32);
+  const auto c = TinyConfig();
+  const auto dir = TempDir("nan");
+  auto opt = Quiet(dir, 10);
+  opt.inject_nan_at_step = 5;
+  const auto report = Trainer(c, opt).Run(data, data);
+  CHECK(report.rollbacks == 1);
+  CHECK(report.phase1_steps == 10);
+  const auto log = ReadAll(report.log_path);
+  CHECK(log.find("\"event\":\"rollback\"") != std::string::npos);
+  CHECK(log.find("\"to_phase1_step\":3") != std::string::npos);  // last checkpoint before 5
+  Networks n(c);
+  const auto meta = LoadCheckpoint(report.checkpoint_path, n, {}, false);
+  CHECK(meta.lr_scale == 0.5);
+  for (const auto& p : n.g->parameters()) REQUIRE(torch::isfinite(p).all().item<bool>());
+  for (const auto& p : n.d->parameters()) REQUIRE(torch::isfinite(p).all().item<bool>());
+  fs::remove_all(dir);
+}
+
+TEST_CASE("the synthesizer renders RGB-D in metres with invalid depth 0", "[unit]") {
+  const auto dir = TempDir("synth");
+  const auto c = TinyConfig();
+  Networks n(c);
+  CheckpointMeta meta;
+  meta.config = c;
+  meta.camera.image_width = 32;
+  meta.camera.image_height = 32;
+  {
+    torch::NoGradGuard ng;
+    n.g->to_image->bias[3].fill_(20.0);  // depth channel saturates at +1 = depth_max
+  }
+  SaveCheckpoint(dir + "/far.pt", meta, n, {});
+  {
+    torch::NoGradGuard ng;
+    n.g->to_image->bias[3].fill_(-20.0);  // -1 = 0 m = invalid
+  }
+  SaveCheckpoint(dir + "/near.pt", meta, n, {});
+  SynthesizerOptions o;
+  o.threads = 1;
+  auto far = LoadSynthesizer(dir + "/far.pt", o);
+  auto near = LoadSynthesizer(dir + "/near.pt", o);
+  const p2i::scene::Pose pose;
+  const auto v = far->Render(pose);
+  REQUIRE(v.rgb.type() == CV_8UC3);
+  REQUIRE(v.depth.type() == CV_32FC1);
+  CHECK(v.rgb.cols == 32);
+  CHECK(v.depth.rows == 32);
+  double lo, hi;
+  cv::minMaxLoc(v.depth, &lo, &hi);
+  CHECK(lo == Approx(c.depth_max).epsilon(1e-3));
+  cv::minMaxLoc(near->Render(pose).depth, &lo, &hi);
+  CHECK(hi == 0.0);
+  // Batch == single renders; parameters and FLOPs are reported (G only: ENET untrained).
+  const std::vector<p2i::scene::Pose> poses = {
+      pose, p2i::scene::Pose(Eigen::Vector3d(0.5, 0, 0), Eigen::Quaterniond::Identity())};
+  const auto batch = far->RenderBatch(poses);
+  REQUIRE(batch.size() == 2);
+  CHECK(cv::norm(batch[1].rgb, far->Render(poses[1]).rgb, cv::NORM_INF) <= 1.0);
+  CHECK(far->Name() == "p2i_net_g");
+  CHECK(far->ParameterCount() == CountParameters(*n.g));
+  CHECK(far->FlopsPerView() == Approx(2.0 * n.g->MacsPerView()));
+  SynthesizerOptions want_enet = o;
+  want_enet.stage = "g+enet";
+  CHECK_THROWS_WITH(LoadSynthesizer(dir + "/far.pt", want_enet), Catch::Contains("no trained ENET"));
+  fs::remove_all(dir);
+}
+
+TEST_CASE("end to end: P2I-NET beats the mean image on held-out procedural frames", "[slow]") {
+  auto all = MakeProceduralDataset(160, 64);
+  p2i::scene::RgbdDataset train, val;
+  train.camera = val.camera = all.camera;
+  for (size_t i = 0; i < all.frames.size(); ++i)
+    (i % 8 == 4 ? val : train).frames.push_back(all.frames[i]);
+  P2iConfig c;
+  c.name = "e2e";
+  c.resolution = 32;
+  c.g_schedule = "custom";
+  c.g_widths = {128, 128, 64, 32};
+  c.d_base_width = 32;
+  c.d_max_width = 128;
+  c.latent_dim = 256;
+  c.enet_width = 32;
+  c.enet_blocks = 2;
+  c.batch_size = 16;
+  c.val_every = 100;
+  c.checkpoint_every = 200;
+  c.steps_phase1 = 500;
+  c.steps_phase2 = 250;
+  c.Validate();
+  const auto dir = TempDir("e2e");
+  TrainerOptions o;
+  o.out_dir = dir;
+  o.threads = 2;
+  o.progress = false;
+  o.max_val_frames = 20;
+  const auto report = Trainer(c, o).Run(train, val);
+  INFO("val PSNR " << report.val_psnr << " dB, mean image " << report.mean_image_val_psnr << " dB");
+  CHECK(report.val_psnr > report.mean_image_val_psnr + 3.0);
+  // The synthesizer reproduces the trainer's validation figure's order of magnitude.
+  auto synth = LoadSynthesizer(report.checkpoint_path);
+  CHECK(synth->Name() == "p2i_net");
+  fs::remove_all(dir);
+}
