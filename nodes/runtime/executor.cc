@@ -8,6 +8,7 @@
 #include <algorithm>
 
 #include "nodes/runtime/shutdown.h"
+#include "nodes/runtime/wire_io.h"
 
 namespace p2i::runtime {
 
@@ -77,7 +78,7 @@ bool Executor::SpinOnce(std::chrono::nanoseconds max_wait) {
   for (auto& s : sockets_) items.push_back({s.socket->handle(), 0, ZMQ_POLLIN, 0});
   const auto wait = std::max<int64_t>(
       0, std::chrono::duration_cast<std::chrono::milliseconds>(deadline - now).count());
-  zmq::poll(items.data(), items.size(), std::chrono::milliseconds(wait));
+  Poll(items.data(), items.size(), std::chrono::milliseconds(wait));
   if (Stopped()) return false;
 
   if (items[1].revents & ZMQ_POLLIN) DrainWakeFd();

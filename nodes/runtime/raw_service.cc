@@ -151,7 +151,7 @@ bool RawServiceClient::Call(const msgs::WireMessage& request, msgs::WireMessage*
       if (now >= deadline) break;
       zmq::pollitem_t items[] = {{socket_->handle(), 0, ZMQ_POLLIN, 0},
                                  {nullptr, Shutdown::WakeFd(), ZMQ_POLLIN, 0}};
-      zmq::poll(items, 2, std::chrono::duration_cast<std::chrono::milliseconds>(deadline - now));
+      Poll(items, 2, std::chrono::duration_cast<std::chrono::milliseconds>(deadline - now));
       if (!(items[0].revents & ZMQ_POLLIN)) continue;
       std::vector<zmq::message_t> frames;
       zmq::message_t first;

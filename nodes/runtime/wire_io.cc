@@ -2,12 +2,26 @@
 /// @brief Multipart send/receive of WireMessages.
 #include "nodes/runtime/wire_io.h"
 
+#include <cerrno>
+
 namespace p2i::runtime {
 namespace {
 
 void FreeBlob(void* /*data*/, void* hint) { delete static_cast<msgs::Blob*>(hint); }
 
 }  // namespace
+
+int Poll(zmq::pollitem_t* items, size_t count, std::chrono::milliseconds timeout) {
+  try {
+    return zmq::poll(items, count, timeout);
+  } catch (const zmq::error_t& e) {
+    if (e.num() == EINTR) {
+      for (size_t i = 0; i < count; ++i) items[i].revents = 0;
+      return 0;
+    }
+    throw;
+  }
+}
 
 zmq::message_t BlobFrame(const msgs::Blob& blob) {
   if (!blob || blob->empty()) return zmq::message_t();

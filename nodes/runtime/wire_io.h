@@ -2,6 +2,7 @@
 /// @brief Sending and receiving WireMessages as ZeroMQ multipart messages (blobs zero-copy).
 #pragma once
 
+#include <chrono>
 #include <string>
 #include <vector>
 
@@ -17,6 +18,10 @@ namespace p2i::runtime {
 /// dontwait) — then nothing more is sent.
 bool SendWire(zmq::socket_t& socket, const msgs::WireMessage& m,
               zmq::send_flags flags = zmq::send_flags::none);
+
+/// zmq::poll that treats EINTR (a signal arrived, e.g. SIGTERM) as "nothing ready" instead of
+/// throwing; callers then see the shutdown flag. Other errors still throw zmq::error_t.
+int Poll(zmq::pollitem_t* items, size_t count, std::chrono::milliseconds timeout);
 
 /// Zero-copy frame of a blob (the frame keeps the shared_ptr alive).
 zmq::message_t BlobFrame(const msgs::Blob& blob);
