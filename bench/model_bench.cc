@@ -1,0 +1,119 @@
+/// @file model_bench.cc
+/// @brief Training step time (phase 1 and 2) and inference latency (p50/p99, batch 1) of P2I-NET
+/// for several resolutions and the shipped presets, with parameters, FLOPs and the ratio of the
+/// measured time to the time at the machine's measured matmul FLOP rate.
+///
+/// usage: model_bench [--threads N] [--out results.csv] [--quick] [--presets DIR]
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "model/model_profiling.h"
+#include "model/p2i_config.h"
+#include "model/p2i_synthesizer.h"
+
+using namespace p2i;
+
+namespace {
+
+struct Row {
+  std::string name;
+  model::P2iConfig config;
+};
+
+model::P2iConfig Ladder(int res) {
+  model::P2iConfig c;
+  c.name = "ladder_" + std::to_string(res);
+  c.resolution = res;
+  c.g_schedule = "custom";
+  c.g_widths.clear();
+  const std::vector<int> base = {256, 256, 128, 64, 32, 16, 8, 8};
+  int stages = 0;
+  while ((4 << stages) <= res) ++stages;
+  c.g_widths.assign(base.begin(), base.begin() + stages);
+  c.enet_width = res >= 256 ? 8 : 16;
+  c.enet_blocks = 1;
+  c.d_base_width = res >= 256 ? 16 : 32;
+  c.d_max_width = 256;
+  c.batch_size = res >= 256 ? 8 : 16;
+  c.Validate();
+  return c;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  int threads = 2;
+  bool quick = false;
+  std::string out = "model_bench.csv";
+  std::string presets = std::string(P2I_SOURCE_DIR_BENCH) + "/model/presets";
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--threads" && i + 1 < argc) threads = std::atoi(argv[++i]);
+    else if (a == "--out" && i + 1 < argc) out = argv[++i];
+    else if (a == "--presets" && i + 1 < argc) presets = argv[++i];
+    else if (a == "--quick") quick = true;
+    else {
+      std::fprintf(stderr, "usage: model_bench [--threads N] [--out CSV] [--quick] [--presets DIR]\n");
+      return 1;
+    }
+  }
+  const double flop_rate = model::MeasureMatmulFlopRate(1024, threads);
+  std::printf("matmul 1024x1024 on %d threads: %.1f GFLOP/s\n", threads, flop_rate / 1e9);
+
+  std::vector<Row> rows;
+  for (int r : {64, 128, 256}) rows.push_back({"ladder_" + std::to_string(r), Ladder(r)});
+  for (const std::string name : {"default", "default_256", "cnn_baseline"}) {
+    const std::string path = presets + "/" + name + ".yaml";
+    if (std::filesystem::exists(path)) rows.push_back({name, model::P2iConfig::FromYamlFile(path)});
+  }
+  const auto tmp = std::filesystem::temp_directory_path() / "p2i_model_bench.pt";
+  std::ofstream csv(out);
+  csv << "name,resolution,threads,params,gflops_per_view,p50_ms,p99_ms,views_per_s,"
+         "infer_ratio_to_matmul,train1_ms,train1_ratio,train2_ms,train2_ratio\n";
+  std::printf("%-14s %5s %10s %8s %8s %8s %8s %6s %10s %6s %10s %6s\n", "model", "res", "params",
+              "GFLOP/v", "p50 ms", "p99 ms", "views/s", "ratio", "train1 ms", "ratio", "train2 ms",
+              "ratio");
+  for (const auto& row : rows) {
+    model::WriteUntrainedCheckpoint(row.config, tmp.string());
+    model::SynthesizerOptions so;
+    so.threads = threads;
+    auto synth = model::LoadSynthesizer(tmp.string(), so);
+    const scene::Pose pose;
+    for (int i = 0; i < 3; ++i) synth->Render(pose);
+    const int n = quick ? 20 : 100;
+    std::vector<double> ms;
+    for (int i = 0; i < n; ++i) {
+      const auto t0 = std::chrono::steady_clock::now();
+      synth->Render(pose);
+      ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+    }
+    std::sort(ms.begin(), ms.end());
+    const double p50 = ms[ms.size() / 2], p99 = ms[std::min(ms.size() - 1, ms.size() * 99 / 100)];
+    const double flops = synth->FlopsPerView();
+    const double infer_ratio = (p50 / 1e3) / (flops / flop_rate);
+    const int steps = quick ? 2 : 5;
+    const double t1 = model::TimeTrainingStep(row.config, 1, steps, threads);
+    const double t1_ratio = t1 / (model::TrainingStepFlops(row.config, 1) / flop_rate);
+    const double t2 = model::TimeTrainingStep(row.config, 2, steps, threads);
+    const double f2 = model::TrainingStepFlops(row.config, 2);
+    const double t2_ratio = f2 > 0 ? t2 / (f2 / flop_rate) : 0.0;
+    std::printf("%-14s %5d %10lld %8.3f %8.2f %8.2f %8.1f %6.1f %10.1f %6.1f %10.1f %6.1f\n",
+                row.name.c_str(), row.config.resolution,
+                static_cast<long long>(synth->ParameterCount()), flops / 1e9, p50, p99,
+                1e3 / p50, infer_ratio, t1 * 1e3, t1_ratio, t2 * 1e3, t2_ratio);
+    std::fflush(stdout);
+    csv << row.name << "," << row.config.resolution << "," << threads << ","
+        << synth->ParameterCount() << "," << flops / 1e9 << "," << p50 << "," << p99 << ","
+        << 1e3 / p50 << "," << infer_ratio << "," << t1 * 1e3 << "," << t1_ratio << ","
+        << t2 * 1e3 << "," << t2_ratio << "\n";
+  }
+  std::filesystem::remove(tmp);
+  std::printf("wrote %s\n", out.c_str());
+  return 0;
+}
