@@ -3,6 +3,8 @@
 #include "msgs/codec.h"
 
 #include <google/protobuf/descriptor.h>
+#include <google/protobuf/io/coded_stream.h>
+#include <google/protobuf/io/zero_copy_stream_impl_lite.h>
 #include <google/protobuf/message.h>
 #include <google/protobuf/stubs/logging.h>
 
@@ -288,7 +290,15 @@ WireMessage EncodeMeta(Pb meta, pb::MsgType type) {
   meta.mutable_header()->set_type(type);
   meta.mutable_header()->set_schema_version(kSchemaVersion);
   WireMessage wire;
-  meta.SerializeToString(&wire.header);
+  {
+    // Deterministic: protobuf maps (NodeStatus counters, TrainerStatus losses) otherwise come
+    // out in a per-process random order, and equal messages should be equal bytes (latching,
+    // dedup, reproducible tests).
+    gpb::io::StringOutputStream bytes(&wire.header);
+    gpb::io::CodedOutputStream coded(&bytes);
+    coded.SetSerializationDeterministic(true);
+    meta.SerializeToCodedStream(&coded);
+  }
   return wire;
 }
 

@@ -37,6 +37,9 @@ int ElementSize(Encoding encoding);
 /// "RGB8", "DEPTH32F", ...
 const char* EncodingName(Encoding encoding);
 
+/// The three structs below are value types (copying shares the immutable blobs):
+/// thread-compatible.
+///
 /// An RGB-D camera frame: metadata (header, camera info or id, optional pose) and two images.
 /// meta.rgb / meta.depth are overwritten from `rgb` / `depth` by Encode and filled by Decode.
 struct RgbdFrame {

@@ -3,6 +3,8 @@
 #include <catch2/catch.hpp>
 
 #include <google/protobuf/descriptor.h>
+#include <google/protobuf/io/coded_stream.h>
+#include <google/protobuf/io/zero_copy_stream_impl_lite.h>
 #include <google/protobuf/message.h>
 
 #include <array>
@@ -184,7 +186,13 @@ Blob RandomBlob(testing::Samples& s, size_t max) {
 bool Mutate(Mutation mutation, pb::MsgType type, testing::Samples& s, WireMessage* wire) {
   auto meta = NewMeta(type);
   REQUIRE(meta->ParseFromString(wire->header));
-  auto reserialize = [&] { wire->header = meta->SerializeAsString(); };
+  auto reserialize = [&] {
+    wire->header.clear();
+    gpb::io::StringOutputStream bytes(&wire->header);
+    gpb::io::CodedOutputStream coded(&bytes);
+    coded.SetSerializationDeterministic(true);  // map order is random per process otherwise
+    meta->SerializeToCodedStream(&coded);
+  };
   auto* header = static_cast<pb::Header*>(meta->GetReflection()->MutableMessage(
       meta.get(), meta->GetDescriptor()->FindFieldByNumber(1)));
   switch (mutation) {

@@ -2,8 +2,11 @@
 /// @brief Each rejection reason of the decoders, the counters, and what is accepted and fixed.
 #include <catch2/catch.hpp>
 
+#include <atomic>
 #include <cmath>
 #include <limits>
+#include <thread>
+#include <vector>
 
 #include "msgs/codec.h"
 #include "tests/msgs/samples.h"
@@ -294,6 +297,32 @@ TEST_CASE("Encode refuses programmer errors", "[unit]") {
   RenderReplyMsg reply = s.MakeRenderReply(2);
   reply.images.pop_back();
   CHECK_THROWS_AS(Encode(reply), std::invalid_argument);
+}
+
+TEST_CASE("decoders and counters are safe to use from many threads", "[unit]") {
+  testing::Samples s(19);
+  const WireMessage good = Encode(s.MakeView(32, 24));
+  WireMessage bad = good;
+  bad.blobs.pop_back();
+  constexpr int kThreads = 4, kEach = 500;
+  const uint64_t ok_before = DecodeStats::Global().Get(DecodeReason::kOk);
+  const uint64_t missing_before = DecodeStats::Global().Get(DecodeReason::kMissingBlob);
+  std::atomic<int> wrong{0};
+  std::vector<std::thread> threads;
+  for (int t = 0; t < kThreads; ++t) {
+    threads.emplace_back([&] {
+      for (int i = 0; i < kEach; ++i) {
+        View out;
+        std::string error;
+        if (!Decode(good, &out, &error) || Decode(bad, &out, &error)) ++wrong;
+      }
+    });
+  }
+  for (auto& t : threads) t.join();
+  CHECK(wrong == 0);
+  CHECK(DecodeStats::Global().Get(DecodeReason::kOk) - ok_before == kThreads * kEach);
+  CHECK(DecodeStats::Global().Get(DecodeReason::kMissingBlob) - missing_before ==
+        kThreads * kEach);
 }
 
 TEST_CASE("DecodeStats snapshot names every reason", "[unit]") {
