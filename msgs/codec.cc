@@ -51,42 +51,51 @@ std::string Num(double v) {
 // ---- Generic checks ---------------------------------------------------------------------------
 
 /// Every float/double field anywhere in `m` (nested messages, repeated fields, map values)
-/// must be finite. Recursion depth is bounded by the schema (no recursive messages).
-bool CheckFinite(const gpb::Message& m, const std::string& path, Failure* f) {
+/// must be finite. Recursion depth is bounded by the schema (no recursive messages). The path
+/// of the offending field is only built on failure (this runs on every message).
+bool FindNonFinite(const gpb::Message& m, std::string* path, double* value) {
   const gpb::Reflection* refl = m.GetReflection();
   std::vector<const gpb::FieldDescriptor*> fields;
   refl->ListFields(m, &fields);
   for (const gpb::FieldDescriptor* fd : fields) {
-    const std::string name = Join(path, fd->name());
-    if (fd->is_repeated()) {
-      const int n = refl->FieldSize(m, fd);
-      for (int i = 0; i < n; ++i) {
-        const std::string item = name + "[" + std::to_string(i) + "]";
-        double v = 0;
-        switch (fd->cpp_type()) {
-          case gpb::FieldDescriptor::CPPTYPE_DOUBLE: v = refl->GetRepeatedDouble(m, fd, i); break;
-          case gpb::FieldDescriptor::CPPTYPE_FLOAT: v = refl->GetRepeatedFloat(m, fd, i); break;
-          case gpb::FieldDescriptor::CPPTYPE_MESSAGE:
-            if (!CheckFinite(refl->GetRepeatedMessage(m, fd, i), item, f)) return false;
-            continue;
-          default: continue;
-        }
-        if (!std::isfinite(v)) return Reject(f, DecodeReason::kNonFinite, item + " is " + Num(v));
-      }
-    } else {
+    const int n = fd->is_repeated() ? refl->FieldSize(m, fd) : 1;
+    for (int i = 0; i < n; ++i) {
       double v = 0;
       switch (fd->cpp_type()) {
-        case gpb::FieldDescriptor::CPPTYPE_DOUBLE: v = refl->GetDouble(m, fd); break;
-        case gpb::FieldDescriptor::CPPTYPE_FLOAT: v = refl->GetFloat(m, fd); break;
-        case gpb::FieldDescriptor::CPPTYPE_MESSAGE:
-          if (!CheckFinite(refl->GetMessage(m, fd), name, f)) return false;
+        case gpb::FieldDescriptor::CPPTYPE_DOUBLE:
+          v = fd->is_repeated() ? refl->GetRepeatedDouble(m, fd, i) : refl->GetDouble(m, fd);
+          break;
+        case gpb::FieldDescriptor::CPPTYPE_FLOAT:
+          v = fd->is_repeated() ? refl->GetRepeatedFloat(m, fd, i) : refl->GetFloat(m, fd);
+          break;
+        case gpb::FieldDescriptor::CPPTYPE_MESSAGE: {
+          const gpb::Message& sub =
+              fd->is_repeated() ? refl->GetRepeatedMessage(m, fd, i) : refl->GetMessage(m, fd);
+          if (FindNonFinite(sub, path, value)) {
+            *path = fd->name() + (fd->is_repeated() ? "[" + std::to_string(i) + "]" : "") + "." +
+                    *path;
+            return true;
+          }
           continue;
-        default: continue;
+        }
+        default:
+          continue;
       }
-      if (!std::isfinite(v)) return Reject(f, DecodeReason::kNonFinite, name + " is " + Num(v));
+      if (!std::isfinite(v)) {
+        *path = fd->name() + (fd->is_repeated() ? "[" + std::to_string(i) + "]" : "");
+        *value = v;
+        return true;
+      }
     }
   }
-  return true;
+  return false;
+}
+
+bool CheckFinite(const gpb::Message& m, Failure* f) {
+  std::string path;
+  double value = 0;
+  if (!FindNonFinite(m, &path, &value)) return true;
+  return Reject(f, DecodeReason::kNonFinite, path + " is " + Num(value));
 }
 
 bool CheckPose(pb::Pose* pose, const std::string& field, Failure* f) {
@@ -364,7 +373,7 @@ bool ParseMeta(const WireMessage& wire, pb::MsgType expected, Pb* meta, Failure*
     return Reject(f, DecodeReason::kUnparsable,
                   std::string("header frame is not a valid ") + TypeName(expected));
   }
-  return CheckFinite(*meta, "", f);
+  return CheckFinite(*meta, f);
 }
 
 bool NoBlobs(const WireMessage& wire, Failure* f) {
