@@ -78,7 +78,7 @@ Row PubSub(const std::string& transport, const std::string& endpoint, int frames
     so.endpoints = {raw->Endpoint()};
     runtime::RawSubscriber sub(topic, so);
     latencies_ms.reserve(frames);
-    uint64_t measured_from = 0;
+    uint64_t measured_from = 0, expected_seq = 0;
     auto last_rx = Clock::now();
     while (true) {
       msgs::WireMessage m;
@@ -103,8 +103,24 @@ Row PubSub(const std::string& transport, const std::string& endpoint, int frames
       }
       t_last = last_rx;
       ++received;
+      if (h.seq() != expected_seq && expected_seq != 0) {
+        std::fprintf(stderr, "  [%s] gap: expected seq %llu, got %llu\n", transport.c_str(),
+                     static_cast<unsigned long long>(expected_seq),
+                     static_cast<unsigned long long>(h.seq()));
+      }
+      expected_seq = h.seq() + 1;
       latencies_ms.push_back((runtime::NowNs() - h.publish_stamp_ns()) * 1e-6);
       if (h.seq() == fs + frames - 1) break;
+    }
+    if (received < frames && expected_seq != 0 && expected_seq <= first_seq.load() + frames - 1) {
+      std::fprintf(stderr, "  [%s] stopped waiting at seq %llu of %llu\n", transport.c_str(),
+                   static_cast<unsigned long long>(expected_seq),
+                   static_cast<unsigned long long>(first_seq.load() + frames - 1));
+    }
+    if (measured_from > first_seq.load()) {
+      std::fprintf(stderr, "  [%s] first measured frame lost: got %llu first, expected %llu\n",
+                   transport.c_str(), static_cast<unsigned long long>(measured_from),
+                   static_cast<unsigned long long>(first_seq.load()));
     }
     dropped = frames - received;
     malformed += sub.Stats().malformed.load();

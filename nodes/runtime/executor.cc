@@ -76,8 +76,9 @@ bool Executor::SpinOnce(std::chrono::nanoseconds max_wait) {
   items.push_back({nullptr, Shutdown::WakeFd(), ZMQ_POLLIN, 0});
   items.push_back({nullptr, wake_fd_, ZMQ_POLLIN, 0});
   for (auto& s : sockets_) items.push_back({s.socket->handle(), 0, ZMQ_POLLIN, 0});
+  // Round up: waking a fraction of a millisecond early would spin until the timer is due.
   const auto wait = std::max<int64_t>(
-      0, std::chrono::duration_cast<std::chrono::milliseconds>(deadline - now).count());
+      0, std::chrono::ceil<std::chrono::milliseconds>(deadline - now).count());
   Poll(items.data(), items.size(), std::chrono::milliseconds(wait));
   if (Stopped()) return false;
 
