@@ -33,6 +33,12 @@ SlamSink::SlamSink(SlamSinkOptions options, std::optional<scene::CameraInfo> cam
   }
 }
 
+bool SlamSink::SetCamera(const scene::CameraInfo& camera) {
+  if (!options_.check || checker_) return false;
+  checker_ = std::make_unique<OdometryChecker>(options_.checker, camera);
+  return true;
+}
+
 SlamSink::Outcome SlamSink::Process(const SinkFrame& frame) {
   if (closed_) throw std::logic_error("SlamSink::Process after Close");
   Outcome outcome;

@@ -40,6 +40,11 @@ class SlamSink {
   /// summary as check_enabled = false). Throws like TumSequenceWriter / OdometryChecker.
   SlamSink(SlamSinkOptions options, std::optional<scene::CameraInfo> camera);
 
+  /// Provides the intrinsics later (e.g. from a latched camera_info topic); enables the check
+  /// from the next frame on if checking is on and no camera was given yet. Returns whether this
+  /// call enabled it.
+  bool SetCamera(const scene::CameraInfo& camera);
+
   /// Throws std::runtime_error on an I/O error (the frame is then not acknowledged).
   Outcome Process(const SinkFrame& frame);
 
