@@ -14,6 +14,7 @@
 #include <fstream>
 #include <functional>
 #include <sstream>
+#include <stdexcept>
 
 namespace p2i::runtime {
 namespace {
@@ -75,6 +76,18 @@ std::string Registry::Register(const RegistryEntry& e) {
 
 void Registry::Unregister(const std::string& path) {
   if (!path.empty()) std::remove(path.c_str());
+}
+
+void Registry::CheckEndpointFree(const std::string& endpoint, const std::string& what) {
+  if (endpoint.rfind("ipc://", 0) != 0) return;  // tcp: bind itself fails if the port is taken
+  for (const auto& e : List()) {
+    if (e.endpoint == endpoint) {
+      throw std::runtime_error(what + ": endpoint " + endpoint + " is already bound by " +
+                               e.kind + " '" + e.name + "' of node " + e.node + " (pid " +
+                               std::to_string(e.pid) +
+                               "); give one of them another name or endpoint");
+    }
+  }
 }
 
 std::vector<RegistryEntry> Registry::List() {

@@ -35,6 +35,10 @@ class Registry {
   /// best-effort and never fails a node).
   static std::string Register(const RegistryEntry& e);
   static void Unregister(const std::string& path);
+  /// Throws std::runtime_error if a live process has registered `endpoint` already (ZeroMQ
+  /// would silently take an ipc:// path over from its current owner). `what` names the caller
+  /// in the message.
+  static void CheckEndpointFree(const std::string& endpoint, const std::string& what);
   /// All live entries (pid still running), sorted by kind and name.
   static std::vector<RegistryEntry> List();
 };

@@ -22,6 +22,7 @@ RawPublisher::RawPublisher(std::string resolved_topic, std::string type_name,
   socket_.set(zmq::sockopt::sndhwm, options_.sndhwm);
   try {
     if (options_.bind) {
+      Registry::CheckEndpointFree(endpoint_, "publisher of topic '" + topic_ + "'");
       socket_.bind(endpoint_);
       endpoint_ = socket_.get(zmq::sockopt::last_endpoint);
     } else {

@@ -44,6 +44,7 @@ RawServiceServer::RawServiceServer(std::string resolved_name, std::string type_n
   socket_.set(zmq::sockopt::maxmsgsize, options_.max_message_bytes);
   // A reply to a client that has gone away (Lazy Pirate reopened it) is dropped silently.
   socket_.set(zmq::sockopt::router_mandatory, false);
+  Registry::CheckEndpointFree(endpoint_, "service '" + name_ + "'");
   try {
     socket_.bind(endpoint_);
     endpoint_ = socket_.get(zmq::sockopt::last_endpoint);

@@ -247,3 +247,15 @@ TEST_CASE("PubSub: RGB-D frames arrive intact over ipc and tcp", "[unit]") {
   CHECK(*got.depth.data == *f.depth.data);
   CHECK(got.depth.depth_scale == 0.001);
 }
+
+TEST_CASE("PubSub: a second publisher cannot take over a bound ipc endpoint", "[unit]") {
+  Shutdown::ResetForTesting();
+  ScopedRunDir run_dir;
+  RawPublisher first("/dup", "PoseStamped", "/a", PublisherOptions{});
+  try {
+    RawPublisher second("/dup", "PoseStamped", "/b", PublisherOptions{});
+    FAIL("expected the second bind to be refused");
+  } catch (const std::runtime_error& e) {
+    CHECK(std::string(e.what()).find("node /a") != std::string::npos);
+  }
+}
