@@ -28,12 +28,20 @@ nlohmann::json ToJson(const ErrorSummary& s) {
 
 SlamSink::SlamSink(SlamSinkOptions options, std::optional<scene::CameraInfo> camera)
     : options_((options.Validate(), std::move(options))), writer_(options_.writer) {
-  if (options_.check && camera) {
-    checker_ = std::make_unique<OdometryChecker>(options_.checker, *camera);
+  if (camera) {
+    WriteCamera(*camera);
+    if (options_.check) checker_ = std::make_unique<OdometryChecker>(options_.checker, *camera);
   }
 }
 
+void SlamSink::WriteCamera(const scene::CameraInfo& camera) {
+  // scene::ReadTumRgbd (and our dataset loader) take the calibration from this file.
+  camera.ToYamlFile((std::filesystem::path(options_.writer.out_dir) / "camera_info.yaml").string());
+  camera_written_ = true;
+}
+
 bool SlamSink::SetCamera(const scene::CameraInfo& camera) {
+  if (!camera_written_) WriteCamera(camera);
   if (!options_.check || checker_) return false;
   checker_ = std::make_unique<OdometryChecker>(options_.checker, camera);
   return true;

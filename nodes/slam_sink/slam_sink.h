@@ -21,7 +21,8 @@ namespace p2i::slam_sink {
 /// Takes frames as they arrive: accounts their sequence numbers per source, checks synthetic
 /// frames with OdometryChecker (when enabled and a camera is known), applies the policy (flag:
 /// write and mark; drop: do not write failing frames) and writes them with TumSequenceWriter.
-/// Close() finalises the sequence and writes summary.json. A frame is "acknowledged" when
+/// Close() finalises the sequence and writes summary.json. The views' calibration, once known,
+/// is written as out_dir/camera_info.yaml (ROS format) for readers of the sequence. A frame is "acknowledged" when
 /// Process() returns with written = true: its files are then on disk and listed.
 ///
 /// Thread-compatible: one thread calls everything.
@@ -65,6 +66,8 @@ class SlamSink {
   const OdometryChecker* checker() const { return checker_.get(); }
 
  private:
+  void WriteCamera(const scene::CameraInfo& camera);
+
   SlamSinkOptions options_;
   TumSequenceWriter writer_;
   std::unique_ptr<OdometryChecker> checker_;
@@ -77,6 +80,7 @@ class SlamSink {
   uint64_t flagged_ = 0;
   uint64_t dropped_ = 0;
   uint64_t write_errors_ = 0;
+  bool camera_written_ = false;
   bool closed_ = false;
 };
 

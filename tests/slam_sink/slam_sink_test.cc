@@ -6,6 +6,7 @@
 
 #include <catch2/catch.hpp>
 
+#include "scene/tum_rgbd.h"
 #include "tests/slam_sink/sink_test_util.h"
 
 namespace p2i::slam_sink {
@@ -85,6 +86,17 @@ TEST_CASE("SlamSink with policy flag writes every frame and marks the failing on
   CHECK(summary["sequences"]["/synthesizer"]["missing"] == nlohmann::json::parse("[[2,2]]"));
   CHECK(summary["sequences"]["/camera"]["missing_count"] == 0);
   CHECK(summary["total_missing"] == 1);
+
+  // The sequence reads back with the project's TUM reader, calibration included.
+  scene::TumRgbdOptions read_options;
+  read_options.max_pose_gap = 1.0;
+  const scene::DatasetIndex index = scene::ReadTumRgbd(dir.str(), read_options);
+  CHECK(index.size() == 4);
+  CHECK(index.camera().fx() == Approx(SmallCamera().fx()));
+  const scene::RgbdSample first = index.Load(0);
+  const SinkFrame expected = Stream().front();
+  CHECK(cv::norm(first.rgb, expected.rgb, cv::NORM_INF) == 0.0);
+  CHECK(first.pose.equals(expected.pose, 1e-6));
 }
 
 TEST_CASE("SlamSink with policy drop does not write failing frames", "[unit]") {
