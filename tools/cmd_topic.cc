@@ -9,7 +9,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <deque>
 #include <string>
 #include <vector>
 
@@ -17,6 +16,7 @@
 
 #include "msgs/codec.h"
 #include "nodes/runtime/endpoints.h"
+#include "nodes/runtime/rate_window.h"
 #include "nodes/runtime/raw_subscriber.h"
 #include "nodes/runtime/shutdown.h"
 #include "tools/command.h"
@@ -102,8 +102,7 @@ int Hz(const std::string& topic, const std::vector<std::string>& endpoints, size
        double duration_s) {
   runtime::RawSubscriber sub(topic, SubOptions(topic, endpoints));
   using Clock = std::chrono::steady_clock;
-  std::deque<double> periods;
-  double last_arrival = -1;
+  runtime::RateWindow rate(window);
   const auto start = Clock::now();
   auto next_report = start + std::chrono::seconds(1);
   bool any = false;
@@ -113,39 +112,23 @@ int Hz(const std::string& topic, const std::vector<std::string>& endpoints, size
     msgs::WireMessage m;
     msgs::pb::Header h;
     if (sub.Receive(&m, &h, std::chrono::milliseconds(50))) {
-      const double t = std::chrono::duration<double>(Clock::now() - start).count();
-      if (last_arrival >= 0) {
-        periods.push_back(t - last_arrival);
-        if (window > 0 && periods.size() > window) periods.pop_front();
-      }
-      last_arrival = t;
+      rate.Add(std::chrono::duration<double>(Clock::now() - start).count());
       any = true;
     }
-    if (Clock::now() >= next_report) {
-      next_report += std::chrono::seconds(1);
-      if (periods.empty()) {
-        if (!any) std::printf("no new messages\n");
-        std::fflush(stdout);
-        continue;
-      }
-      double sum = 0, mn = periods.front(), mx = periods.front();
-      for (double p : periods) {
-        sum += p;
-        mn = std::min(mn, p);
-        mx = std::max(mx, p);
-      }
-      const double mean = sum / periods.size();
-      double var = 0;
-      for (double p : periods) var += (p - mean) * (p - mean);
-      const double stddev = std::sqrt(var / periods.size());
+    if (Clock::now() < next_report) continue;
+    next_report += std::chrono::seconds(1);
+    const auto s = rate.Summarize();
+    if (s.periods == 0) {
+      if (!any) std::printf("no new messages\n");
+    } else {
       std::printf("average rate: %.3f\n\tmin: %.3fs max: %.3fs std dev: %.5fs window: %zu\n",
-                  1.0 / mean, mn, mx, stddev, periods.size() + 1);
+                  s.rate_hz, s.min_s, s.max_s, s.stddev_s, s.periods + 1);
       if (sub.Stats().dropped.load() > 0) {
         std::printf("\tdropped (sequence gaps): %llu\n",
                     static_cast<unsigned long long>(sub.Stats().dropped.load()));
       }
-      std::fflush(stdout);
     }
+    std::fflush(stdout);
   }
   return 0;
 }
