@@ -1,0 +1,124 @@
+/// @file pose_source_node.cc
+/// @brief pose_source: trajectories from generators or files, published at a rate.
+#include "nodes/pose_source/pose_source_node.h"
+
+#include <chrono>
+#include <optional>
+
+#include "nodes/camera/msg_convert.h"
+#include "scene/dataset_trajectories.h"
+#include "scene/sim_scene.h"
+
+namespace p2i::nodes {
+namespace {
+
+std::chrono::nanoseconds Period(double rate_hz) {
+  return std::chrono::nanoseconds(static_cast<int64_t>(1e9 / rate_hz));
+}
+
+scene::SimScene LoadSceneSpec(const std::string& spec) {
+  const std::string prefix = "builtin:";
+  if (spec.rfind(prefix, 0) == 0) return scene::SimScene::BuiltIn(spec.substr(prefix.size()));
+  return scene::SimScene::FromYamlFile(spec);
+}
+
+std::vector<scene::StampedPose> LoadOne(const std::string& spec, int index,
+                                        const std::string& scene_spec, const char* param) {
+  std::optional<scene::SimScene> sim;
+  if (spec.find("random_walk") != std::string::npos) sim.emplace(LoadSceneSpec(scene_spec));
+  auto all = scene::ResolveTrajectorySpec(spec, sim ? &*sim : nullptr);
+  if (index < 0 || static_cast<size_t>(index) >= all.size()) {
+    throw runtime::StartupError(std::string(param) + "_index " + std::to_string(index) +
+                                " is out of range: '" + spec + "' gives " +
+                                std::to_string(all.size()) + " trajectories");
+  }
+  if (all[index].empty()) throw runtime::StartupError("trajectory '" + spec + "' is empty");
+  return all[index];
+}
+
+}  // namespace
+
+PoseSourceNode::PoseSourceNode(const runtime::NodeArgs& args) : Node("pose_source", args) {
+  const std::string spec = Declare<std::string>(
+      "trajectory", "arm_sweep", "generator name, inline {type: ...} map, .yaml or TUM file");
+  const int index = Declare<int>("trajectory_index", 0, "which trajectory of a multi spec");
+  const std::string planned_spec =
+      Declare<std::string>("planned_trajectory", "", "spec of planned poses; empty = none");
+  const int planned_index = Declare<int>("planned_trajectory_index", 0, "which planned one");
+  const std::string scene_spec = Declare<std::string>(
+      "scene", "builtin:small_office", "scene for the random_walk generator");
+  const double rate = Declare<double>("rate", 20.0, "measured poses per second");
+  double planned_rate = Declare<double>("planned_rate", 0.0, "planned poses per second; 0 = rate");
+  loop_ = Declare<bool>("loop", true, "restart the trajectory at its end");
+  exit_at_end_ = Declare<bool>("exit_at_end", false, "stop the node when the trajectory ends");
+  frame_id_ = Declare<std::string>("frame_id", "world", "frame of the poses");
+  if (!(rate > 0.0) || planned_rate < 0.0) {
+    throw runtime::StartupError("rate must be > 0 and planned_rate >= 0");
+  }
+  if (planned_rate == 0.0) planned_rate = rate;
+
+  try {
+    measured_ = LoadOne(spec, index, scene_spec, "trajectory");
+    if (!planned_spec.empty()) {
+      planned_ = LoadOne(planned_spec, planned_index, scene_spec, "planned_trajectory");
+    }
+  } catch (const runtime::StartupError&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw runtime::StartupError(e.what());
+  }
+  Log().info("{} measured poses at {} Hz from '{}'{}", measured_.size(), rate, spec,
+             planned_.empty() ? std::string()
+                              : ", " + std::to_string(planned_.size()) + " planned poses from '" +
+                                    planned_spec + "'");
+
+  pose_pub_ = Advertise<msgs::pb::PoseStamped>("pose");
+  AddTimer(Period(rate), [this] { PublishMeasured(); });
+  if (!planned_.empty()) {
+    planned_pub_ = Advertise<msgs::pb::PoseRequest>("planned_pose");
+    AddTimer(Period(planned_rate), [this] { PublishPlanned(); });
+  } else {
+    planned_done_ = true;
+  }
+}
+
+bool PoseSourceNode::Advance(size_t* index, size_t size) {
+  if (++*index < size) return true;
+  if (!loop_) return false;
+  *index = 0;
+  Count("laps");
+  return true;
+}
+
+void PoseSourceNode::PublishMeasured() {
+  if (measured_done_) return;
+  msgs::pb::PoseStamped msg;
+  msg.mutable_header()->set_capture_stamp_ns(runtime::NowNs());
+  msg.mutable_header()->set_frame_id(frame_id_);
+  ToMsg(measured_[measured_index_].pose, msg.mutable_pose(), frame_id_);
+  pose_pub_->Publish(msg);
+  Count("poses_published");
+  if (!Advance(&measured_index_, measured_.size())) {
+    measured_done_ = true;
+    Log().info("measured trajectory finished ({} poses)", measured_.size());
+    if (exit_at_end_ && planned_done_) Stop();
+  }
+}
+
+void PoseSourceNode::PublishPlanned() {
+  if (planned_done_) return;
+  msgs::pb::PoseRequest msg;
+  msg.mutable_header()->set_capture_stamp_ns(runtime::NowNs());
+  msg.mutable_header()->set_frame_id(frame_id_);
+  msg.set_request_id(++request_id_);
+  ToMsg(planned_[planned_index_].pose, msg.mutable_pose(), frame_id_);
+  planned_pub_->Publish(msg);
+  Count("planned_published");
+  if (!Advance(&planned_index_, planned_.size())) {
+    planned_done_ = true;
+    Log().info("planned trajectory finished ({} poses)", planned_.size());
+    if (exit_at_end_ && measured_done_) Stop();
+  }
+}
+
+}  // namespace p2i::nodes
