@@ -1,0 +1,46 @@
+/// @file baseline_nearest.cc
+/// @brief Nearest-keyframe baseline.
+#include "model/baseline_nearest.h"
+
+#include <cmath>
+#include <stdexcept>
+#include <utility>
+
+#include "model/coverage.h"
+
+namespace p2i::model {
+
+void NearestKeyframeOptions::Validate() const {
+  if (!std::isfinite(metres_per_degree) || metres_per_degree < 0.0) {
+    throw std::invalid_argument(
+        "NearestKeyframeOptions.metres_per_degree must be finite and >= 0, got " +
+        std::to_string(metres_per_degree));
+  }
+}
+
+NearestKeyframe::NearestKeyframe(scene::RgbdDataset training, NearestKeyframeOptions options)
+    : training_(std::move(training)), options_(options) {
+  options_.Validate();
+  if (training_.frames.empty()) {
+    throw std::invalid_argument("NearestKeyframe: the training dataset has no frames");
+  }
+  poses_.reserve(training_.frames.size());
+  for (const auto& f : training_.frames) poses_.push_back(f.pose);
+}
+
+size_t NearestKeyframe::NearestIndex(const scene::Pose& pose) const {
+  return NearestPoseIndices(poses_, pose, 1, options_.metres_per_degree).front();
+}
+
+View NearestKeyframe::Render(const scene::Pose& pose) {
+  const scene::RgbdSample& f = training_.frames[NearestIndex(pose)];
+  View v;
+  v.stamp = f.stamp;
+  v.pose = pose;
+  v.rgb = f.rgb.clone();
+  v.depth = f.depth.clone();
+  v.id = "nearest:" + f.id;
+  return v;
+}
+
+}  // namespace p2i::model

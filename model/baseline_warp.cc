@@ -1,0 +1,190 @@
+/// @file baseline_warp.cc
+/// @brief DIBR forward warping with per-source z-buffers and a z-tolerance blend.
+#include "model/baseline_warp.h"
+
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <utility>
+
+#include <Eigen/Geometry>
+#include <opencv2/imgproc.hpp>
+
+#include "model/coverage.h"
+
+namespace p2i::model {
+namespace {
+
+/// One source frame warped into the output view: front-most depth and colour per pixel.
+struct Warped {
+  cv::Mat depth;  // CV_32FC1, 0 = nothing landed
+  cv::Mat rgb;    // CV_8UC3
+};
+
+Warped WarpOne(const scene::RgbdSample& src, const scene::CameraInfo& src_cam,
+               const scene::Pose& target, const scene::CameraInfo& out_cam) {
+  Warped w;
+  w.depth = cv::Mat::zeros(out_cam.image_height, out_cam.image_width, CV_32FC1);
+  w.rgb = cv::Mat::zeros(out_cam.image_height, out_cam.image_width, CV_8UC3);
+  // Source camera -> target camera transform.
+  const Eigen::Matrix4d t_ts = (target.Inverse() * src.pose).ToMatrix();
+  const Eigen::Matrix3d r = t_ts.block<3, 3>(0, 0);
+  const Eigen::Vector3d t = t_ts.block<3, 1>(0, 3);
+  const double sfx = src_cam.fx(), sfy = src_cam.fy(), scx = src_cam.cx(), scy = src_cam.cy();
+  const double fx = out_cam.fx(), fy = out_cam.fy(), cx = out_cam.cx(), cy = out_cam.cy();
+  const int w_out = out_cam.image_width, h_out = out_cam.image_height;
+  for (int v = 0; v < src.depth.rows; ++v) {
+    const float* drow = src.depth.ptr<float>(v);
+    const cv::Vec3b* crow = src.rgb.ptr<cv::Vec3b>(v);
+    for (int u = 0; u < src.depth.cols; ++u) {
+      const double z = drow[u];
+      if (!(std::isfinite(z) && z > 0.0)) continue;
+      const Eigen::Vector3d p_s((u - scx) / sfx * z, (v - scy) / sfy * z, z);
+      const Eigen::Vector3d p_t = r * p_s + t;
+      if (p_t.z() <= 1e-6) continue;  // behind the target camera
+      const int ut = static_cast<int>(std::lround(fx * p_t.x() / p_t.z() + cx));
+      const int vt = static_cast<int>(std::lround(fy * p_t.y() / p_t.z() + cy));
+      if (ut < 0 || vt < 0 || ut >= w_out || vt >= h_out) continue;
+      float& zb = w.depth.at<float>(vt, ut);
+      const float zt = static_cast<float>(p_t.z());
+      if (zb == 0.0f || zt < zb) {
+        zb = zt;
+        w.rgb.at<cv::Vec3b>(vt, ut) = crow[u];
+      }
+    }
+  }
+  return w;
+}
+
+/// Push-pull hole filling (Gortler et al. 1996): average the valid pixels down a pyramid, then
+/// fill each level's holes from the upsampled coarser level. `valid` is CV_8UC1 (non-zero =
+/// keep); `image` is CV_32FC1 and is filled in place (single channel: OpenCV's MatExpr scalar
+/// arithmetic does not reliably broadcast over channels). No OpenCV photo module needed.
+void PushPullFill(cv::Mat& image, const cv::Mat& valid) {
+  cv::Mat weight;
+  valid.convertTo(weight, CV_32F, 1.0 / 255.0);
+  std::vector<cv::Mat> premult{image.mul(weight)}, weights{weight};
+  while (premult.back().cols > 1 || premult.back().rows > 1) {
+    const cv::Size next((premult.back().cols + 1) / 2, (premult.back().rows + 1) / 2);
+    cv::Mat p, w;
+    cv::resize(premult.back(), p, next, 0, 0, cv::INTER_AREA);
+    cv::resize(weights.back(), w, next, 0, 0, cv::INTER_AREA);
+    premult.push_back(p);
+    weights.push_back(w);
+  }
+  // Top level: normalised average of everything valid.
+  cv::Mat filled;
+  cv::divide(premult.back(), cv::max(weights.back(), 1e-12), filled);
+  for (int l = static_cast<int>(premult.size()) - 2; l >= 0; --l) {
+    cv::Mat up;
+    cv::resize(filled, up, premult[static_cast<size_t>(l)].size(), 0, 0, cv::INTER_LINEAR);
+    cv::Mat level;
+    cv::divide(premult[static_cast<size_t>(l)], cv::max(weights[static_cast<size_t>(l)], 1e-12),
+               level);
+    // Where a level has (partial) valid support keep its own average, blended by its weight.
+    const cv::Mat& w = weights[static_cast<size_t>(l)];
+    cv::Mat wc = cv::min(w, 1.0);
+    cv::Mat one_minus = 1.0 - wc;
+    filled = level.mul(wc) + up.mul(one_minus);
+  }
+  filled.copyTo(image, ~valid);
+}
+
+}  // namespace
+
+void DepthWarpOptions::Validate() const {
+  if (k < 1) throw std::invalid_argument("DepthWarpOptions.k must be >= 1, got " + std::to_string(k));
+  if (!std::isfinite(metres_per_degree) || metres_per_degree < 0.0) {
+    throw std::invalid_argument("DepthWarpOptions.metres_per_degree must be finite and >= 0");
+  }
+  if (!std::isfinite(z_tolerance) || z_tolerance < 0.0) {
+    throw std::invalid_argument("DepthWarpOptions.z_tolerance must be finite and >= 0");
+  }
+}
+
+DepthWarp::DepthWarp(scene::RgbdDataset training, DepthWarpOptions options,
+                     std::optional<scene::CameraInfo> output_camera)
+    : training_(std::move(training)), options_(options) {
+  options_.Validate();
+  if (training_.frames.empty()) {
+    throw std::invalid_argument("DepthWarp: the training dataset has no frames");
+  }
+  const cv::Size size(training_.camera.image_width, training_.camera.image_height);
+  for (const auto& f : training_.frames) {
+    if (f.rgb.type() != CV_8UC3 || f.depth.type() != CV_32FC1 || f.rgb.size() != size ||
+        f.depth.size() != size) {
+      throw std::invalid_argument("DepthWarp: training frame '" + f.id +
+                                  "' needs rgb CV_8UC3 and depth CV_32FC1 of the camera size " +
+                                  std::to_string(size.width) + "x" +
+                                  std::to_string(size.height));
+    }
+    poses_.push_back(f.pose);
+  }
+  output_camera_ = output_camera ? *output_camera : training_.camera;
+  if (output_camera_.image_width <= 0 || output_camera_.image_height <= 0 ||
+      output_camera_.fx() <= 0.0 || output_camera_.fy() <= 0.0) {
+    throw std::invalid_argument("DepthWarp: output camera needs a positive size and focal length");
+  }
+}
+
+View DepthWarp::Render(const scene::Pose& pose) {
+  const auto nearest =
+      NearestPoseIndices(poses_, pose, static_cast<size_t>(options_.k), options_.metres_per_degree);
+  std::vector<Warped> warped;
+  std::vector<double> weights;
+  for (size_t i : nearest) {
+    warped.push_back(WarpOne(training_.frames[i], training_.camera, pose, output_camera_));
+    weights.push_back(1.0 / (CombinedPoseDistance(pose, poses_[i], options_.metres_per_degree) +
+                             1e-3));
+  }
+  const int h = output_camera_.image_height, w = output_camera_.image_width;
+  View out;
+  out.pose = pose;
+  out.id = "depth_warp";
+  out.rgb = cv::Mat::zeros(h, w, CV_8UC3);
+  out.depth = cv::Mat::zeros(h, w, CV_32FC1);
+  cv::Mat holes = cv::Mat::zeros(h, w, CV_8UC1);
+  int64_t hole_count = 0;
+  for (int v = 0; v < h; ++v) {
+    for (int u = 0; u < w; ++u) {
+      float z_front = std::numeric_limits<float>::infinity();
+      for (const auto& wp : warped) {
+        const float z = wp.depth.at<float>(v, u);
+        if (z > 0.0f && z < z_front) z_front = z;
+      }
+      if (!std::isfinite(z_front)) {
+        holes.at<uint8_t>(v, u) = 255;
+        ++hole_count;
+        continue;
+      }
+      const double limit = z_front * (1.0 + options_.z_tolerance);
+      double wsum = 0.0, zsum = 0.0, c[3] = {0.0, 0.0, 0.0};
+      for (size_t s = 0; s < warped.size(); ++s) {
+        const float z = warped[s].depth.at<float>(v, u);
+        if (z <= 0.0f || z > limit) continue;
+        const cv::Vec3b& px = warped[s].rgb.at<cv::Vec3b>(v, u);
+        wsum += weights[s];
+        zsum += weights[s] * z;
+        for (int ch = 0; ch < 3; ++ch) c[ch] += weights[s] * px[ch];
+      }
+      out.depth.at<float>(v, u) = static_cast<float>(zsum / wsum);
+      cv::Vec3b& o = out.rgb.at<cv::Vec3b>(v, u);
+      for (int ch = 0; ch < 3; ++ch) o[ch] = cv::saturate_cast<uint8_t>(c[ch] / wsum);
+    }
+  }
+  last_hole_fraction_ = static_cast<double>(hole_count) / static_cast<double>(h * w);
+  if (options_.fill_holes && hole_count > 0 && hole_count < static_cast<int64_t>(h) * w) {
+    const cv::Mat valid = ~holes;
+    cv::Mat rgb_f;
+    out.rgb.convertTo(rgb_f, CV_32FC3);
+    std::vector<cv::Mat> channels;
+    cv::split(rgb_f, channels);
+    for (auto& ch : channels) PushPullFill(ch, valid);
+    cv::merge(channels, rgb_f);
+    rgb_f.convertTo(out.rgb, CV_8UC3);
+    PushPullFill(out.depth, valid);
+  }
+  return out;
+}
+
+}  // namespace p2i::model
