@@ -1,0 +1,241 @@
+/// @file cmd_launch.cc
+/// @brief `p2i launch FILE.yaml [name:=value ...]`: read a launch file, start its nodes.
+#include <unistd.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <ctime>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "tools/command.h"
+#include "tools/launch_command.h"
+#include "tools/launch_description.h"
+#include "tools/launch_runner.h"
+
+namespace p2i::tools {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr const char* kUsage =
+    "usage: p2i launch FILE.yaml [name:=value ...] [options]\n"
+    "\n"
+    "Starts the nodes of a launch file (a ROS 2 launch YAML subset, see docs/LAUNCH.md), each\n"
+    "as its own process with its output prefixed by [node_name]. Ctrl-C stops them all.\n"
+    "\n"
+    "options:\n"
+    "  --dry-run, --print     print the resolved node command lines, start nothing\n"
+    "  --show-args, -s        list the file's launch arguments and exit\n"
+    "  --grace-period SEC     SIGTERM -> SIGKILL delay when stopping (default 5)\n"
+    "  --run-dir DIR          P2I_RUN_DIR for the nodes (default: $P2I_RUN_DIR, else a fresh\n"
+    "                         /tmp/p2i-$UID/launch-<pid>, removed at exit)\n"
+    "  --log-dir DIR          folder of <node>.log for nodes with output: log|both\n"
+    "  -h, --help             this text\n";
+
+struct Options {
+  std::string file;
+  std::vector<std::string> overrides;
+  bool dry_run = false;
+  bool show_args = false;
+  double grace_period = 5.0;
+  std::string run_dir;
+  std::string log_dir;
+};
+
+// Returns -1 when parsing succeeded, else the exit code to return.
+int ParseArgs(const std::vector<std::string>& args, Options* o) {
+  for (size_t i = 1; i < args.size(); ++i) {
+    const std::string& a = args[i];
+    const auto value = [&](const char* flag) -> std::string {
+      if (i + 1 >= args.size()) throw LaunchError(std::string(flag) + " needs a value");
+      return args[++i];
+    };
+    if (a == "-h" || a == "--help") {
+      std::printf("%s", kUsage);
+      return 0;
+    } else if (a == "--dry-run" || a == "--print") {
+      o->dry_run = true;
+    } else if (a == "--show-args" || a == "-s") {
+      o->show_args = true;
+    } else if (a == "--grace-period") {
+      const std::string v = value("--grace-period");
+      char* end = nullptr;
+      o->grace_period = std::strtod(v.c_str(), &end);
+      if (end == v.c_str() || *end != '\0' || !(o->grace_period >= 0)) {
+        throw LaunchError("--grace-period '" + v + "' must be a number of seconds >= 0");
+      }
+    } else if (a == "--run-dir") {
+      o->run_dir = value("--run-dir");
+    } else if (a == "--log-dir") {
+      o->log_dir = value("--log-dir");
+    } else if (a.find(":=") != std::string::npos) {
+      o->overrides.push_back(a);
+    } else if (!a.empty() && a[0] == '-') {
+      std::fprintf(stderr, "p2i launch: unknown option '%s'\n\n%s", a.c_str(), kUsage);
+      return 2;
+    } else if (o->file.empty()) {
+      o->file = a;
+    } else {
+      std::fprintf(stderr, "p2i launch: unexpected argument '%s' (launch arguments are "
+                           "name:=value)\n", a.c_str());
+      return 2;
+    }
+  }
+  if (o->file.empty()) {
+    std::fprintf(stderr, "p2i launch: no launch file given\n\n%s", kUsage);
+    return 2;
+  }
+  return -1;
+}
+
+std::string Uid() { return std::to_string(::getuid()); }
+
+std::string TimeStamp() {
+  char buf[32];
+  const std::time_t now = std::time(nullptr);
+  std::strftime(buf, sizeof(buf), "%Y%m%d-%H%M%S", std::localtime(&now));
+  return buf;
+}
+
+int ShowArgs(const std::string& file) {
+  const auto args = LaunchDescriptionReader::ListArguments(file);
+  if (args.empty()) std::printf("%s declares no launch arguments\n", file.c_str());
+  for (const auto& a : args) {
+    std::printf("'%s':\n    %s\n    (%s)\n", a.name.c_str(),
+                a.description.empty() ? "no description given" : a.description.c_str(),
+                a.has_default ? ("default: '" + a.default_value + "'").c_str() : "required");
+  }
+  return 0;
+}
+
+std::string CommandLine(const std::vector<std::string>& argv) {
+  std::string line;
+  for (const auto& a : argv) line += (line.empty() ? "" : " ") + ShellQuote(a);
+  return line;
+}
+
+int RunLaunch(const std::vector<std::string>& args) {
+  Options o;
+  const int parse = ParseArgs(args, &o);
+  if (parse >= 0) return parse;
+  if (o.show_args) return ShowArgs(o.file);
+
+  const LaunchDescription description =
+      LaunchDescriptionReader::ReadFile(o.file, ParseLaunchOverrides(o.overrides));
+  if (description.nodes.empty()) {
+    std::fprintf(stderr, "[launch] %s starts no nodes\n", o.file.c_str());
+    return 0;
+  }
+
+  const std::string self_dir = SelfDir();
+  char params_template[] = "/tmp/p2i-launch-params-XXXXXX";
+  if (::mkdtemp(params_template) == nullptr) throw LaunchError("cannot create a folder in /tmp");
+  const std::string params_dir = params_template;
+
+  std::vector<ProcessSpec> specs;
+  std::string missing;
+  bool any_param_file = false;
+  for (size_t i = 0; i < description.nodes.size(); ++i) {
+    const NodeDescription& node = description.nodes[i];
+    std::string searched;
+    std::string exe = FindNodeExecutable(node.exec, self_dir, &searched);
+    if (exe.empty()) {
+      missing += "  " + node.source + ": node '" + node.DisplayName() + "': exec '" + node.exec +
+                 "' not found (looked for " + searched + ")\n";
+      exe = "p2i_" + node.exec;
+    }
+    const NodeCommand cmd = BuildNodeCommand(node, exe, params_dir, static_cast<int>(i));
+    WriteParamFiles(cmd);
+    any_param_file = any_param_file || !cmd.param_files.empty();
+    if (o.dry_run) {
+      std::string flags;
+      if (node.required) flags += ", required";
+      if (node.respawn) {
+        char delay[32];
+        std::snprintf(delay, sizeof(delay), "%g", node.respawn_delay);
+        flags += std::string(", respawn after ") + delay + " s";
+      }
+      if (node.output != "screen") flags += ", output " + node.output;
+      std::printf("# [%s] %s%s\n%s\n", cmd.display_name.c_str(), node.source.c_str(),
+                  flags.c_str(), CommandLine(cmd.argv).c_str());
+      for (const auto& [path, text] : cmd.param_files) {
+        std::printf("#   %s:\n", path.c_str());
+        size_t start = 0, nl;
+        while ((nl = text.find('\n', start)) != std::string::npos) {
+          std::printf("#     %s\n", text.substr(start, nl - start).c_str());
+          start = nl + 1;
+        }
+      }
+    }
+    ProcessSpec spec;
+    spec.name = cmd.display_name;
+    spec.argv = cmd.argv;
+    spec.respawn = node.respawn;
+    spec.respawn_delay = node.respawn_delay;
+    spec.required = node.required;
+    spec.output = node.output;
+    specs.push_back(std::move(spec));
+  }
+  if (!missing.empty()) {
+    std::fprintf(stderr, "p2i launch: executables not found:\n%s(build them, or put them on "
+                         "$PATH)\n", missing.c_str());
+    if (!o.dry_run || !any_param_file) fs::remove_all(params_dir);
+    return 1;
+  }
+  if (o.dry_run) {
+    if (any_param_file) {
+      std::printf("# inline parameter files are kept in %s\n", params_dir.c_str());
+    } else {
+      fs::remove_all(params_dir);
+    }
+    return 0;
+  }
+
+  // One run dir per launch unless the user chose one, so every node (and `p2i topic` given
+  // the same P2I_RUN_DIR) derives the same ipc:// endpoints, and two launches never collide.
+  bool own_run_dir = false;
+  std::string run_dir = o.run_dir;
+  if (run_dir.empty()) {
+    const char* env = std::getenv("P2I_RUN_DIR");
+    if (env != nullptr && *env != '\0') {
+      run_dir = env;
+    } else {
+      run_dir = "/tmp/p2i-" + Uid() + "/launch-" + std::to_string(::getpid());
+      own_run_dir = true;
+    }
+  }
+  fs::create_directories(run_dir);
+  fs::permissions(run_dir, fs::perms::owner_all, fs::perm_options::replace);
+  ::setenv("P2I_RUN_DIR", run_dir.c_str(), 1);
+  std::fprintf(stderr, "[launch] P2I_RUN_DIR=%s%s\n", run_dir.c_str(),
+               own_run_dir ? " (export it to use `p2i topic` with this launch)" : "");
+
+  LaunchRunnerOptions runner_options;
+  runner_options.grace_period = o.grace_period;
+  runner_options.log_dir = !o.log_dir.empty()
+                               ? o.log_dir
+                               : "/tmp/p2i-" + Uid() + "/log/launch-" + TimeStamp() + "-" +
+                                     std::to_string(::getpid());
+  int code = 1;
+  try {
+    LaunchRunner runner(std::move(specs), runner_options);
+    code = runner.Run();
+  } catch (...) {
+    fs::remove_all(params_dir);
+    if (own_run_dir) fs::remove_all(run_dir);
+    throw;
+  }
+  std::error_code ec;
+  fs::remove_all(params_dir, ec);
+  if (own_run_dir) fs::remove_all(run_dir, ec);
+  std::fprintf(stderr, "[launch] done, exit code %d\n", code);
+  return code;
+}
+
+}  // namespace
+}  // namespace p2i::tools
+
+P2I_COMMAND("launch", "Start nodes from a launch YAML file (ROS 2 launch subset)",
+            p2i::tools::RunLaunch);
