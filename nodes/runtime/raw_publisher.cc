@@ -20,6 +20,9 @@ RawPublisher::RawPublisher(std::string resolved_topic, std::string type_name,
   endpoint_ = options_.endpoint.empty() ? DefaultEndpoint("topic", topic_) : options_.endpoint;
   socket_.set(zmq::sockopt::linger, 0);
   socket_.set(zmq::sockopt::sndhwm, options_.sndhwm);
+  if (options_.kernel_buffer_bytes > 0) {
+    socket_.set(zmq::sockopt::sndbuf, options_.kernel_buffer_bytes);
+  }
   try {
     if (options_.bind) {
       Registry::CheckEndpointFree(endpoint_, "publisher of topic '" + topic_ + "'");

@@ -20,6 +20,10 @@ struct PublisherOptions {
   std::string endpoint;
   bool bind = true;          ///< false: connect to `endpoint` (a subscriber binds it instead)
   int sndhwm = 1000;         ///< ZeroMQ default; PUB drops (never blocks) beyond it
+  /// Kernel send buffer (SO_SNDBUF) in bytes; 0 = OS default. Unix sockets default to ~200 KB,
+  /// an eighth of an RGB-D frame; a larger buffer means fewer wake-ups per frame (the kernel
+  /// caps it at net.core.wmem_max).
+  int kernel_buffer_bytes = 4 << 20;
   bool latched = false;      ///< keep the last message and re-publish it (late joiners)
   double latch_period_s = 1.0;
 };

@@ -22,6 +22,9 @@ RawSubscriber::RawSubscriber(std::string resolved_topic, SubscriberOptions optio
   socket_.set(zmq::sockopt::linger, 0);
   socket_.set(zmq::sockopt::rcvhwm,
               options_.latest_only ? options_.latest_only_hwm : options_.rcvhwm);
+  if (options_.kernel_buffer_bytes > 0 && !options_.latest_only) {
+    socket_.set(zmq::sockopt::rcvbuf, options_.kernel_buffer_bytes);
+  }
   socket_.set(zmq::sockopt::subscribe, topic_frame_);
   for (auto& ep : endpoints_) {
     try {

@@ -26,6 +26,9 @@ struct SubscriberOptions {
   bool latest_only = false;
   int rcvhwm = 1000;        ///< ZeroMQ default; latest_only forces it to `latest_only_hwm`
   int latest_only_hwm = 2;
+  /// Kernel receive buffer (SO_RCVBUF) in bytes; 0 = OS default (see PublisherOptions).
+  /// Latest-only subscribers keep the OS default so little stale data waits in the kernel.
+  int kernel_buffer_bytes = 4 << 20;
 };
 
 /// Receives one topic.
