@@ -80,43 +80,48 @@ void OdometryChecker::MotionError(const scene::Pose& estimated, const scene::Pos
   *rotation_error_deg = scene::Pose::RotationDistanceDeg(estimated, expected);
 }
 
-bool OdometryChecker::Estimate(const Frame& reference, const Frame& frame,
-                               scene::Pose* motion) const {
-  const cv::Mat k = CameraMatrixFor(frame.gray.size());
-  cv::Ptr<cv::rgbd::Odometry> odometry;
-  if (options_.method == "rgbd") {
-    odometry = cv::makePtr<cv::rgbd::RgbdOdometry>(k);
-  } else if (options_.method == "icp") {
-    odometry = cv::makePtr<cv::rgbd::ICPOdometry>(k);
-  } else {
-    odometry = cv::makePtr<cv::rgbd::RgbdICPOdometry>(k);
-  }
+cv::Ptr<cv::rgbd::Odometry> OdometryChecker::OdometryFor(cv::Size size) {
+  if (odometry_ && odometry_size_ == size) return odometry_;
+  const cv::Mat k = CameraMatrixFor(size);
   // OpenCV's own plausibility limits (default 0.15 m / 15 deg) must not reject motions we
   // still want to measure.
   const double max_translation = 2.0 * options_.max_baseline_m + 0.5;
   const double max_rotation = 2.0 * options_.max_baseline_deg + 15.0;
-  if (auto* o = dynamic_cast<cv::rgbd::RgbdOdometry*>(odometry.get())) {
+  if (options_.method == "rgbd") {
+    auto o = cv::makePtr<cv::rgbd::RgbdOdometry>(k);
     o->setMinDepth(options_.min_depth_m);
+    o->setMaxDepth(options_.max_depth_m);
     o->setMaxTranslation(max_translation);
     o->setMaxRotation(max_rotation);
-    o->setMaxDepth(options_.max_depth_m);
-  } else if (auto* o = dynamic_cast<cv::rgbd::ICPOdometry*>(odometry.get())) {
+    odometry_ = o;
+  } else if (options_.method == "icp") {
+    auto o = cv::makePtr<cv::rgbd::ICPOdometry>(k);
     o->setMinDepth(options_.min_depth_m);
+    o->setMaxDepth(options_.max_depth_m);
     o->setMaxTranslation(max_translation);
     o->setMaxRotation(max_rotation);
-    o->setMaxDepth(options_.max_depth_m);
-  } else if (auto* o = dynamic_cast<cv::rgbd::RgbdICPOdometry*>(odometry.get())) {
+    odometry_ = o;
+  } else {
+    auto o = cv::makePtr<cv::rgbd::RgbdICPOdometry>(k);
     o->setMinDepth(options_.min_depth_m);
+    o->setMaxDepth(options_.max_depth_m);
     o->setMaxTranslation(max_translation);
     o->setMaxRotation(max_rotation);
-    o->setMaxDepth(options_.max_depth_m);
+    odometry_ = o;
   }
+  odometry_size_ = size;
+  return odometry_;
+}
+
+bool OdometryChecker::Estimate(const Frame& reference, const Frame& frame,
+                               scene::Pose* motion) const {
+  if (!odometry_ || !frame.cache || !reference.cache) return false;
+  cv::Ptr<cv::rgbd::OdometryFrame> src = frame.cache, dst = reference.cache;
   cv::Mat rt;
   bool ok = false;
   try {
     // src = new frame, dst = reference: Rt = T_ref^-1 * T_new (see the class comment).
-    ok = odometry->compute(frame.gray, frame.depth, frame.mask, reference.gray, reference.depth,
-                           reference.mask, rt);
+    ok = odometry_->compute(src, dst, rt);
   } catch (const cv::Exception&) {
     ok = false;  // degenerate input (e.g. no valid pixels on a pyramid level)
   }
@@ -193,6 +198,10 @@ CheckResult OdometryChecker::Check(const cv::Mat& rgb, const cv::Mat& depth,
   cv::patchNaNs(frame->depth, 0.0);
   frame->mask = (frame->depth > options_.min_depth_m) & (frame->depth < options_.max_depth_m);
   frame->pose = requested;
+  if (reference_ && reference_->gray.size() != frame->gray.size()) {
+    reference_.reset();  // a new image size starts a new chain of references
+    previous_.reset();
+  }
   const double valid_fraction =
       static_cast<double>(cv::countNonZero(frame->mask)) / (frame->mask.total());
   if (valid_fraction < options_.min_valid_depth_fraction) {
@@ -201,6 +210,14 @@ CheckResult OdometryChecker::Check(const cv::Mat& rgb, const cv::Mat& depth,
     ++stats_.failed_depth;
     Record(result);
     return result;  // an insane frame is never a reference
+  }
+
+  try {
+    const cv::Ptr<cv::rgbd::Odometry> odometry = OdometryFor(frame->gray.size());
+    frame->cache = cv::makePtr<cv::rgbd::OdometryFrame>(frame->gray, frame->depth, frame->mask);
+    odometry->prepareFrameCache(frame->cache, cv::rgbd::OdometryFrame::CACHE_ALL);
+  } catch (const cv::Exception&) {
+    frame->cache.release();  // Estimate() then reports "no solution"
   }
 
   auto far_from = [&](const Frame& ref) {

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include <opencv2/core.hpp>
+#include <opencv2/rgbd.hpp>
 
 #include "nodes/slam_sink/error_stats.h"
 #include "scene/camera_info.h"
@@ -109,17 +110,25 @@ class OdometryChecker {
     cv::Mat depth;
     cv::Mat mask;
     scene::Pose pose;
+    // Pyramids and normals computed once (CACHE_ALL: usable as source now and as reference
+    // later); null when OpenCV rejected the frame's data.
+    cv::Ptr<cv::rgbd::OdometryFrame> cache;
   };
   // Runs odometry new -> reference; false when OpenCV finds no solution.
   bool Estimate(const Frame& reference, const Frame& frame, scene::Pose* motion) const;
   CheckResult CompareWith(const Frame& reference, const Frame& frame) const;
   cv::Mat CameraMatrixFor(cv::Size size) const;
+  // The odometry object for frames of `size`, created on first use (its normals computer and
+  // internal buffers are expensive to set up, so it is kept while the size stays the same).
+  cv::Ptr<cv::rgbd::Odometry> OdometryFor(cv::Size size);
   void Record(const CheckResult& result);
 
   OdometryCheckerOptions options_;
   scene::CameraInfo camera_;
   std::shared_ptr<Frame> reference_;
   std::shared_ptr<Frame> previous_;  // the immediate predecessor if it was sane
+  cv::Ptr<cv::rgbd::Odometry> odometry_;
+  cv::Size odometry_size_;
   CheckerStats stats_;
   std::vector<double> translation_errors_;
   std::vector<double> rotation_errors_;
