@@ -18,6 +18,7 @@
 
 #include "model/checkpoint.h"
 #include "model/losses.h"
+#include "model/metrics.h"
 #include "model/networks.h"
 
 namespace p2i::model {
@@ -107,16 +108,8 @@ cv::Mat ToRgb8(const torch::Tensor& image) {  // C x R x R in [-1, 1]
   return out;
 }
 
-// PSNR of two 8-bit images over all channels (dB; 100 when identical).
-// TODO(model): switch to model/metrics.h once the evaluation engineer's version lands.
-double Psnr8(const cv::Mat& a, const cv::Mat& b) {
-  cv::Mat fa, fb;
-  a.convertTo(fa, CV_64F);
-  b.convertTo(fb, CV_64F);
-  cv::Mat diff = fa - fb;
-  const double mse = cv::sum(diff.mul(diff))[0] / static_cast<double>(diff.total() * diff.channels());
-  return mse <= 1e-12 ? 100.0 : 10.0 * std::log10(255.0 * 255.0 / mse);
-}
+// PSNR of two 8-bit RGB images (dB, capped at kPsnrCapDb), as the evaluation reports it.
+double Psnr8(const cv::Mat& a, const cv::Mat& b) { return Psnr(a, b); }
 
 std::string FormatDuration(double seconds) {
   if (!std::isfinite(seconds) || seconds < 0) return "--:--";
