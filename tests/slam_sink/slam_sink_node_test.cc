@@ -87,6 +87,18 @@ TEST_CASE("p2i_slam_sink writes published views, reports the lost one, flushes o
     execv(exe.c_str(), argv.data());
     _exit(127);
   }
+  // Never leave the sink running when an assertion ends the test early.
+  struct Reaper {
+    pid_t pid;
+    bool reaped = false;
+    ~Reaper() {
+      if (!reaped) {
+        ::kill(pid, SIGKILL);
+        ::waitpid(pid, nullptr, 0);
+      }
+      unsetenv("P2I_RUN_DIR");
+    }
+  } reaper{pid};
   auto stderr_text = [&] {
     std::ifstream in(err_path);
     return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
@@ -131,6 +143,7 @@ TEST_CASE("p2i_slam_sink writes published views, reports the lost one, flushes o
   REQUIRE(::kill(pid, SIGTERM) == 0);
   int status = 0;
   REQUIRE(::waitpid(pid, &status, 0) == pid);
+  reaper.reaped = true;
   INFO(stderr_text());
   REQUIRE(WIFEXITED(status));
   CHECK(WEXITSTATUS(status) == 0);
@@ -172,7 +185,6 @@ TEST_CASE("p2i_slam_sink writes published views, reports the lost one, flushes o
     const cv::Mat d = cv::imread(out_dir + "/" + Split(line)[1], cv::IMREAD_UNCHANGED);
     CHECK(d.type() == CV_16UC1);
   }
-  unsetenv("P2I_RUN_DIR");
 }
 
 }  // namespace
