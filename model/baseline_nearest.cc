@@ -6,9 +6,26 @@
 #include <stdexcept>
 #include <utility>
 
+#include <yaml-cpp/yaml.h>
+
 #include "model/coverage.h"
+#include "scene/sim_yaml_reader.h"
 
 namespace p2i::model {
+
+NearestKeyframeOptions NearestKeyframeOptions::FromYaml(const YAML::Node& node,
+                                                        const std::string& source) {
+  const scene::SimYamlReader r(source);
+  r.CheckKeys(node, {"metres_per_degree"}, "nearest_keyframe options");
+  NearestKeyframeOptions o;
+  if (node["metres_per_degree"]) o.metres_per_degree = r.Double(node["metres_per_degree"], "metres_per_degree");
+  try {
+    o.Validate();
+  } catch (const std::invalid_argument& e) {
+    r.Fail(node, e.what());
+  }
+  return o;
+}
 
 void NearestKeyframeOptions::Validate() const {
   if (!std::isfinite(metres_per_degree) || metres_per_degree < 0.0) {

@@ -8,11 +8,18 @@
 #include "model/view_synthesizer.h"
 #include "scene/rgbd_sample.h"
 
+namespace YAML {
+class Node;
+}  // namespace YAML
+
 namespace p2i::model {
 
 struct NearestKeyframeOptions {
   /// Rotation weight of the pose distance |dt| + metres_per_degree * angle_deg (see coverage.h).
   double metres_per_degree = 0.01;
+  /// Reads the keys present in a YAML map (others keep their defaults), then Validate().
+  /// Unknown keys and bad values throw std::runtime_error naming `source`, the line and the key.
+  static NearestKeyframeOptions FromYaml(const YAML::Node& node, const std::string& source);
   /// Throws std::invalid_argument when metres_per_degree is negative or not finite.
   void Validate() const;
 };

@@ -7,10 +7,13 @@
 #include <stdexcept>
 #include <utility>
 
+#include <yaml-cpp/yaml.h>
+
 #include <Eigen/Geometry>
 #include <opencv2/imgproc.hpp>
 
 #include "model/coverage.h"
+#include "scene/sim_yaml_reader.h"
 
 namespace p2i::model {
 namespace {
@@ -91,6 +94,32 @@ void PushPullFill(cv::Mat& image, const cv::Mat& valid) {
 }
 
 }  // namespace
+
+DepthWarpOptions DepthWarpOptions::FromYaml(const YAML::Node& node, const std::string& source) {
+  const scene::SimYamlReader r(source);
+  r.CheckKeys(node, {"k", "metres_per_degree", "z_tolerance", "fill_holes"}, "depth_warp options");
+  DepthWarpOptions o;
+  if (node["k"]) {
+    const double k = r.Double(node["k"], "k");
+    if (k != std::floor(k)) r.Fail(node["k"], "k must be an integer");
+    o.k = static_cast<int>(k);
+  }
+  if (node["metres_per_degree"]) o.metres_per_degree = r.Double(node["metres_per_degree"], "metres_per_degree");
+  if (node["z_tolerance"]) o.z_tolerance = r.Double(node["z_tolerance"], "z_tolerance");
+  if (node["fill_holes"]) {
+    try {
+      o.fill_holes = node["fill_holes"].as<bool>();
+    } catch (const YAML::Exception&) {
+      r.Fail(node["fill_holes"], "fill_holes must be true or false");
+    }
+  }
+  try {
+    o.Validate();
+  } catch (const std::invalid_argument& e) {
+    r.Fail(node, e.what());
+  }
+  return o;
+}
 
 void DepthWarpOptions::Validate() const {
   if (k < 1) throw std::invalid_argument("DepthWarpOptions.k must be >= 1, got " + std::to_string(k));

@@ -11,6 +11,10 @@
 #include "scene/camera_info.h"
 #include "scene/rgbd_sample.h"
 
+namespace YAML {
+class Node;
+}  // namespace YAML
+
 namespace p2i::model {
 
 struct DepthWarpOptions {
@@ -24,6 +28,9 @@ struct DepthWarpOptions {
   /// and depth.
   /// Off: holes stay marked as rgb (0, 0, 0) and depth 0.
   bool fill_holes = false;
+  /// Reads the keys present in a YAML map (others keep their defaults), then Validate().
+  /// Unknown keys and bad values throw std::runtime_error naming `source`, the line and the key.
+  static DepthWarpOptions FromYaml(const YAML::Node& node, const std::string& source);
   /// Throws std::invalid_argument naming the field.
   void Validate() const;
 };

@@ -10,6 +10,10 @@
 #include <string>
 #include <utility>
 
+#include <yaml-cpp/yaml.h>
+
+#include "scene/sim_yaml_reader.h"
+
 namespace p2i::model {
 namespace {
 
@@ -42,6 +46,21 @@ std::vector<size_t> NearestPoseIndices(const std::vector<scene::Pose>& poses,
   out.reserve(m);
   for (size_t i = 0; i < m; ++i) out.push_back(d[i].second);
   return out;
+}
+
+CoverageOptions CoverageOptions::FromYaml(const YAML::Node& node, const std::string& source) {
+  const scene::SimYamlReader r(source);
+  r.CheckKeys(node, {"metres_per_degree", "falloff", "fallback_spacing_m"}, "coverage options");
+  CoverageOptions o;
+  if (node["metres_per_degree"]) o.metres_per_degree = r.Double(node["metres_per_degree"], "metres_per_degree");
+  if (node["falloff"]) o.falloff = r.Double(node["falloff"], "falloff");
+  if (node["fallback_spacing_m"]) o.fallback_spacing_m = r.Double(node["fallback_spacing_m"], "fallback_spacing_m");
+  try {
+    o.Validate();
+  } catch (const std::invalid_argument& e) {
+    r.Fail(node, e.what());
+  }
+  return o;
 }
 
 void CoverageOptions::Validate() const {

@@ -5,9 +5,14 @@
 #pragma once
 
 #include <cstddef>
+#include <string>
 #include <vector>
 
 #include "scene/pose.h"
+
+namespace YAML {
+class Node;
+}  // namespace YAML
 
 namespace p2i::model {
 
@@ -30,6 +35,9 @@ struct CoverageOptions {
   double falloff = 2.0;
   /// Spacing used when it cannot be measured (a single training pose, or all poses identical), m.
   double fallback_spacing_m = 0.05;
+  /// Reads the keys present in a YAML map (others keep their defaults), then Validate().
+  /// Unknown keys and bad values throw std::runtime_error naming `source`, the line and the key.
+  static CoverageOptions FromYaml(const YAML::Node& node, const std::string& source);
   /// Throws std::invalid_argument naming the field when a value is not positive and finite.
   void Validate() const;
 };

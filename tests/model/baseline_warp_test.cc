@@ -6,7 +6,11 @@
 #include <catch2/catch.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include <yaml-cpp/yaml.h>
+
+#include "model/baseline_nearest.h"
 #include "model/baseline_warp.h"
+#include "model/coverage.h"
 #include "model/metrics.h"
 
 using namespace p2i::model;
@@ -160,4 +164,28 @@ TEST_CASE("DepthWarp blends the k nearest frames and renders at a requested came
   CHECK(vh.rgb.size() == cv::Size(kW / 2, kH / 2));
   CHECK(wh.Camera().image_width == kW / 2);
   CHECK(cv::countNonZero(vh.depth) > kW * kH / 8);
+}
+
+TEST_CASE("DepthWarpOptions and CoverageOptions from YAML", "[unit]") {
+  const YAML::Node node = YAML::Load("{k: 2, z_tolerance: 0.1, fill_holes: true}");
+  const DepthWarpOptions o = DepthWarpOptions::FromYaml(node, "bench.yaml");
+  CHECK(o.k == 2);
+  CHECK(o.z_tolerance == Approx(0.1));
+  CHECK(o.fill_holes);
+  CHECK(o.metres_per_degree == Approx(DepthWarpOptions{}.metres_per_degree));
+  try {
+    DepthWarpOptions::FromYaml(YAML::Load("{k: 2, fil_holes: true}"), "bench.yaml");
+    FAIL("unknown key accepted");
+  } catch (const std::runtime_error& e) {
+    const std::string what = e.what();
+    CHECK(what.find("bench.yaml") != std::string::npos);
+    CHECK(what.find("fil_holes") != std::string::npos);
+  }
+  CHECK_THROWS_AS(DepthWarpOptions::FromYaml(YAML::Load("{k: 0}"), "b.yaml"), std::runtime_error);
+  CHECK_THROWS_AS(DepthWarpOptions::FromYaml(YAML::Load("{k: 1.5}"), "b.yaml"), std::runtime_error);
+  CHECK(NearestKeyframeOptions::FromYaml(YAML::Load("{metres_per_degree: 0.02}"), "b.yaml")
+            .metres_per_degree == Approx(0.02));
+  CHECK(CoverageOptions::FromYaml(YAML::Load("{falloff: 3}"), "b.yaml").falloff == Approx(3.0));
+  CHECK_THROWS_AS(CoverageOptions::FromYaml(YAML::Load("{falloff: -1}"), "b.yaml"),
+                  std::runtime_error);
 }
