@@ -12,6 +12,7 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -318,4 +319,23 @@ TEST_CASE("p2i launch --dry-run prints command lines and starts nothing", "[inte
   const auto pos = out.find("kept in ");
   REQUIRE(pos != std::string::npos);
   fs::remove_all(out.substr(pos + 8, out.find('\n', pos) - pos - 8));
+}
+
+TEST_CASE("p2i launch output: log writes to <log-dir>/<name>.log only", "[integration]") {
+  TempDir dir;
+  const std::string logs = dir.path() + "/logs";
+  const std::string file = dir.Write("log.yaml", R"(launch:
+- node: {exec: fake_node, name: quiet, output: log, args: "--lines 2"}
+- node: {exec: fake_node, name: chatty, output: both, args: "--lines 1"}
+)");
+  Launcher launcher({file, "--log-dir", logs});
+  REQUIRE(launcher.Wait() == 0);
+  INFO(launcher.out() << launcher.err());
+  CHECK_THAT(launcher.out(), !Catch::Contains("[quiet]"));
+  CHECK_THAT(launcher.out(), Catch::Contains("[chatty] line 0"));
+  std::ifstream quiet(logs + "/quiet.log");
+  const std::string text((std::istreambuf_iterator<char>(quiet)), std::istreambuf_iterator<char>());
+  CHECK_THAT(text, Catch::Contains("line 1\n"));
+  CHECK_THAT(text, Catch::Contains("done\n"));  // stderr goes to the log too
+  CHECK(CountLines(logs + "/chatty.log") >= 2);
 }
