@@ -3,7 +3,8 @@
 /// for several resolutions and the shipped presets, with parameters, FLOPs and the ratio of the
 /// measured time to the time at the machine's measured matmul FLOP rate.
 ///
-/// usage: model_bench [--threads N] [--out results.csv] [--quick] [--presets DIR]
+/// usage: model_bench [--threads N] [--out results.csv] [--quick] [--infer-only] [--presets DIR]
+/// (--infer-only skips the training-step timings, reported as 0)
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -50,6 +51,7 @@ model::P2iConfig Ladder(int res) {
 int main(int argc, char** argv) {
   int threads = 2;
   bool quick = false;
+  bool infer_only = false;
   std::string out = "model_bench.csv";
   std::string presets = std::string(P2I_SOURCE_DIR_BENCH) + "/model/presets";
   for (int i = 1; i < argc; ++i) {
@@ -58,8 +60,9 @@ int main(int argc, char** argv) {
     else if (a == "--out" && i + 1 < argc) out = argv[++i];
     else if (a == "--presets" && i + 1 < argc) presets = argv[++i];
     else if (a == "--quick") quick = true;
+    else if (a == "--infer-only") infer_only = true;
     else {
-      std::fprintf(stderr, "usage: model_bench [--threads N] [--out CSV] [--quick] [--presets DIR]\n");
+      std::fprintf(stderr, "usage: model_bench [--threads N] [--out CSV] [--quick] [--infer-only] [--presets DIR]\n");
       return 1;
     }
   }
@@ -98,9 +101,9 @@ int main(int argc, char** argv) {
     const double flops = synth->FlopsPerView();
     const double infer_ratio = (p50 / 1e3) / (flops / flop_rate);
     const int steps = quick ? 2 : 5;
-    const double t1 = model::TimeTrainingStep(row.config, 1, steps, threads);
+    const double t1 = infer_only ? 0.0 : model::TimeTrainingStep(row.config, 1, steps, threads);
     const double t1_ratio = t1 / (model::TrainingStepFlops(row.config, 1) / flop_rate);
-    const double t2 = model::TimeTrainingStep(row.config, 2, steps, threads);
+    const double t2 = infer_only ? 0.0 : model::TimeTrainingStep(row.config, 2, steps, threads);
     const double f2 = model::TrainingStepFlops(row.config, 2);
     const double t2_ratio = f2 > 0 ? t2 / (f2 / flop_rate) : 0.0;
     std::printf("%-14s %5d %10lld %8.3f %8.2f %8.2f %8.1f %6.1f %10.1f %6.1f %10.1f %6.1f\n",
