@@ -1,0 +1,52 @@
+/// @file method_loader_test.cc
+/// @brief Training data specs and the method factory of the synthesizer node.
+#include <stdexcept>
+
+#include <catch2/catch.hpp>
+
+#include "nodes/synthesizer/method_loader.h"
+#include "scene/trajectory.h"
+
+namespace p2i::nodes {
+namespace {
+
+TEST_CASE("Built-in training data and the nearest/warp loaders", "[unit]") {
+  const auto sweep = scene::GenerateArmSweep({});
+  const int stride = 10;
+  const scene::RgbdDataset poses_only =
+      LoadTrainingData("builtin:small_office", 32, 24, /*with_frames=*/false, stride);
+  REQUIRE(poses_only.frames.size() == (sweep.size() + stride - 1) / stride);
+  CHECK(poses_only.camera.image_width == 32);
+  CHECK(poses_only.camera.image_height == 24);
+  CHECK(poses_only.frames[1].rgb.empty());
+  CHECK(scene::Pose::TranslationDistance(poses_only.frames[1].pose, sweep[stride].pose) < 1e-12);
+
+  auto training = std::make_shared<const scene::RgbdDataset>(
+      LoadTrainingData("builtin:small_office", 32, 24, /*with_frames=*/true, stride));
+  REQUIRE(training->frames.size() == poses_only.frames.size());
+  REQUIRE(training->frames[0].rgb.cols == 32);
+  REQUIRE(training->frames[0].depth.rows == 24);
+
+  auto nearest = MakeLoader("nearest", {}, training)({0, "", "nearest"});
+  const model::View n = nearest->Render(training->frames[3].pose);
+  CHECK(cv::norm(n.rgb, training->frames[3].rgb, cv::NORM_L1) == 0.0);  // the keyframe itself
+
+  auto warp = MakeLoader("warp", {}, training)({0, "", "warp"});
+  const model::View w = warp->Render(training->frames[3].pose);
+  CHECK(w.rgb.cols == 32);
+  CHECK(w.depth.rows == 24);
+  CHECK(cv::countNonZero(w.depth > 0.0f) > 32 * 24 / 2);
+
+  CHECK_THROWS_AS(MakeLoader("gan", {}, training), std::invalid_argument);
+  auto no_frames = std::make_shared<const scene::RgbdDataset>(poses_only);
+  CHECK_THROWS_AS(MakeLoader("warp", {}, no_frames), std::invalid_argument);
+  CHECK_THROWS_AS(MakeLoader("nearest", {}, nullptr), std::invalid_argument);
+  // Learned methods need a checkpoint path in the spec.
+  CHECK_THROWS(MakeLoader("p2i", {}, nullptr)({1, "", "p2i"}));
+  CHECK_THROWS(MakeLoader("cnn", {}, nullptr)({1, "/nonexistent/ckpt.pt", "cnn"}));
+  CHECK(LoadTrainingData("", 32, 24, true).frames.empty());
+  CHECK_THROWS(LoadTrainingData("/nonexistent/dataset", 32, 24, true));
+}
+
+}  // namespace
+}  // namespace p2i::nodes
