@@ -1,0 +1,164 @@
+/// @file trainer_node.cc
+/// @brief TrainerNode: parameters, frame intake, publishing.
+#include "nodes/trainer/trainer_node.h"
+
+#include <cmath>
+#include <filesystem>
+
+#include "model/p2i_config.h"
+#include "nodes/camera/msg_convert.h"
+#include "nodes/runtime/endpoints.h"
+#include "scene/dataset_loader.h"
+
+namespace p2i::trainer {
+
+namespace {
+
+/// A decoded frame as a scene sample (copies the images; depth in metres).
+scene::RgbdSample ToSample(const msgs::RgbdFrame& frame) {
+  scene::RgbdSample s;
+  const auto& h = frame.meta.header();
+  s.stamp = h.capture_stamp_ns() * 1e-9;
+  s.id = std::to_string(h.seq());
+  if (frame.meta.has_pose()) s.pose = nodes::FromMsg(frame.meta.pose());
+  cv::Mat rgb = nodes::ToMat(frame.rgb);
+  if (rgb.type() != CV_8UC3) throw std::invalid_argument("rgb is not RGB8");
+  s.rgb = rgb.clone();
+  cv::Mat depth = nodes::ToMat(frame.depth);
+  if (depth.type() == CV_32FC1) {
+    s.depth = depth.clone();
+  } else if (depth.type() == CV_16UC1) {
+    depth.convertTo(s.depth, CV_32FC1, frame.depth.depth_scale);
+    s.depth.setTo(0.0f, depth == static_cast<uint16_t>(frame.depth.invalid_value));
+  } else {
+    throw std::invalid_argument("depth is neither DEPTH32F nor DEPTH16U");
+  }
+  return s;
+}
+
+}  // namespace
+
+TrainerNode::TrainerNode(const runtime::NodeArgs& args) : Node("trainer", args) {
+  const std::string config_file =
+      Declare<std::string>("config", "", "P2I-NET config YAML (model/presets/); empty = defaults");
+  const int resolution =
+      Declare<int>("resolution", 0, "override the config's resolution (0 = keep)");
+  const std::string dataset =
+      Declare<std::string>("dataset", "", "offline: dataset folder to train on; empty = online");
+  std::string work_dir = Declare<std::string>(
+      "work_dir", "", "checkpoints, versions and the buffer; empty = $P2I_RUN_DIR/<node name>");
+  const std::string checkpoint =
+      Declare<std::string>("checkpoint", "", "warm-start checkpoint (copied into work_dir)");
+  const double buffer_mb = Declare<double>("buffer_mb", 256.0, "replay buffer bound (MiB)");
+  const double recent_fraction =
+      Declare<double>("recent_fraction", 0.5, "share of the buffer kept as the recent window");
+  const int min_frames = Declare<int>("min_frames", 8, "frames needed before training starts");
+  const int steps = Declare<int>("publish_every_steps", 200, "training steps per round/version");
+  const int threads = Declare<int>("threads", 1, "torch threads for training");
+  const int max_val = Declare<int>("max_val_frames", 8, "held-out frames for validation PSNR");
+  const int max_rounds = Declare<int>("max_rounds", -1, "stop training after N rounds (-1 = never)");
+  const double status_period =
+      Declare<double>("trainer_status_period", 1.0, "s between TrainerStatus messages");
+  shutdown_wait_s_ =
+      Declare<double>("shutdown_wait", 1.0, "s to wait for a training round on shutdown");
+
+  model::P2iConfig config =
+      config_file.empty() ? model::P2iConfig() : model::P2iConfig::FromYamlFile(config_file);
+  if (resolution > 0) {
+    config.resolution = resolution;
+    if (config.g_schedule == "custom") {
+      // Keep the per-stage widths consistent with the new resolution (one per stage).
+      const int stages = static_cast<int>(std::log2(resolution)) - 1;
+      std::vector<int> w = config.g_widths;
+      w.resize(stages, w.empty() ? 32 : w.back());
+      config.g_widths = w;
+    }
+  }
+  config.Validate();
+  if (work_dir.empty()) work_dir = runtime::RunDir() + "/" + Name();
+
+  ReplayBuffer::Options b;
+  b.dir = work_dir + "/buffer";
+  b.max_mb = buffer_mb;
+  b.recent_fraction = recent_fraction;
+  b.width = b.height = config.resolution;
+  b.seed = config.seed;
+  buffer_ = std::make_unique<ReplayBuffer>(b);
+  Log().info("replay buffer: capacity {} frames ({} recent), {} reloaded from {}",
+             buffer_->Capacity(), buffer_->RecentCapacity(), buffer_->Reloaded(), b.dir);
+
+  runtime::PublisherOptions latched;
+  latched.latched = true;
+  version_pub_ = Advertise<msgs::pb::ModelVersion>("model_version", latched);
+  status_pub_ = Advertise<msgs::pb::TrainerStatus>("trainer_status");
+
+  if (!dataset.empty()) {
+    const scene::DatasetIndex index = scene::OpenDataset(dataset);
+    for (size_t i = 0; i < index.size(); ++i) buffer_->Add(index.Load(i), index.camera());
+    Log().info("offline: {} frames from {} (buffer holds {})", index.size(), dataset,
+               buffer_->Size());
+  } else {
+    frame_sub_ = Subscribe<msgs::RgbdFrame>("rgbd", [this](const msgs::RgbdFrame& f) {
+      OnFrame(f);
+    });
+  }
+
+  TrainingLoop::Options o;
+  o.config = config;
+  o.work_dir = work_dir;
+  o.steps_per_round = steps;
+  o.threads = threads;
+  o.warm_start = checkpoint;
+  o.min_frames = static_cast<size_t>(std::max(2, min_frames));
+  o.max_val_frames = max_val;
+  o.max_rounds = max_rounds;
+  loop_ = std::make_unique<TrainingLoop>(
+      o, buffer_.get(),
+      [this](const msgs::pb::ModelVersion& v) {
+        version_pub_->Publish(v);
+        Count("versions_published");
+        SetValue("val_psnr", v.val_psnr());
+        Log().info("model version {} (step {}, val PSNR {:.2f} dB): {}", v.version(), v.step(),
+                   v.val_psnr(), v.checkpoint_path());
+      },
+      [this](const msgs::pb::TrainerStatus& s) { status_pub_->Publish(s); });
+  if (status_period > 0)
+    AddTimer(std::chrono::nanoseconds(static_cast<int64_t>(status_period * 1e9)),
+             [this] { status_pub_->Publish(loop_->LastStatus()); });
+  loop_->Start();
+}
+
+TrainerNode::~TrainerNode() = default;
+
+void TrainerNode::OnFrame(const msgs::RgbdFrame& frame) {
+  Count("frames_received");
+  if (!frame.meta.has_camera_info()) {
+    Count("frames_without_camera_info");
+    WarnThrottled("no_camera_info", "dropping a frame without inline camera_info");
+    return;
+  }
+  try {
+    const scene::CameraInfo camera = nodes::FromMsg(frame.meta.camera_info());
+    if (!buffer_->Add(ToSample(frame), camera, frame.meta.has_pose())) {
+      Count("frames_without_pose");
+      return;
+    }
+    Count("frames_accepted");
+    SetValue("buffer_size", static_cast<double>(buffer_->Size()));
+  } catch (const std::exception& e) {
+    Count("frames_rejected");
+    WarnThrottled("frame", std::string("dropping a frame: ") + e.what());
+  }
+}
+
+void TrainerNode::OnShutdown() {
+  if (!loop_) return;
+  const bool stopped =
+      loop_->Stop(std::chrono::milliseconds(static_cast<int64_t>(shutdown_wait_s_ * 1000)));
+  if (!stopped)
+    Log().warn("a training round is still running: abandoning it (published versions stay "
+               "valid; the work dir resumes from the last trainer checkpoint)");
+  if (!loop_->Error().empty()) Log().error("training stopped with an error: {}", loop_->Error());
+}
+
+}  // namespace p2i::trainer

@@ -1,0 +1,42 @@
+/// @file trainer_node.h
+/// @brief The trainer node: replay buffer fed from "rgbd" (online) or a dataset folder
+/// (offline), continuous training, ModelVersion / TrainerStatus publishing.
+#pragma once
+
+#include <memory>
+
+#include "nodes/runtime/node.h"
+#include "nodes/trainer/replay_buffer.h"
+#include "nodes/trainer/training_loop.h"
+
+namespace p2i::trainer {
+
+/// Parameters and topics: docs/TRAINER.md. Training runs on the TrainingLoop's thread; frames
+/// are converted and added to the buffer on the executor thread; ModelVersion ("model_version",
+/// latched) and TrainerStatus ("trainer_status") are published from the training thread through
+/// the runtime's locking publishers, and TrainerStatus also every `trainer_status_period` s from
+/// a timer. Thread-safety: as runtime::Node.
+class TrainerNode : public runtime::Node {
+ public:
+  explicit TrainerNode(const runtime::NodeArgs& args);
+  ~TrainerNode() override;
+
+  /// True once the training thread has ended (after shutdown); false means a round was still
+  /// running when OnShutdown gave up waiting: the caller should exit without joining it.
+  bool TrainingStopped() const { return !loop_ || loop_->Finished(); }
+
+ protected:
+  void OnShutdown() override;
+
+ private:
+  void OnFrame(const msgs::RgbdFrame& frame);
+
+  double shutdown_wait_s_ = 1.0;
+  std::unique_ptr<ReplayBuffer> buffer_;
+  std::unique_ptr<TrainingLoop> loop_;
+  std::shared_ptr<runtime::Publisher<msgs::pb::ModelVersion>> version_pub_;
+  std::shared_ptr<runtime::Publisher<msgs::pb::TrainerStatus>> status_pub_;
+  std::shared_ptr<runtime::RawSubscriber> frame_sub_;
+};
+
+}  // namespace p2i::trainer

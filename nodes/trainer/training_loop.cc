@@ -1,0 +1,235 @@
+/// @file training_loop.cc
+/// @brief TrainingLoop: rounds of model::Trainer with resume on a buffer snapshot.
+#include "nodes/trainer/training_loop.h"
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+#include <nlohmann/json.hpp>
+
+#include "model/trainer.h"
+#include "scene/capture.h"
+
+namespace p2i::trainer {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string ReadFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw std::runtime_error("cannot read " + path);
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+uint64_t HighestVersion(const std::string& work_dir) {
+  uint64_t best = 0;
+  const fs::path dir = fs::path(work_dir) / "versions";
+  if (!fs::exists(dir)) return 0;
+  for (const auto& e : fs::directory_iterator(dir)) {
+    const std::string n = e.path().filename().string();
+    if (n.rfind("model_v", 0) == 0 && e.path().extension() == ".pt")
+      best = std::max<uint64_t>(best, std::strtoull(n.c_str() + 7, nullptr, 10));
+  }
+  return best;
+}
+
+}  // namespace
+
+void TrainingLoop::Options::Validate() const {
+  config.Validate();
+  if (work_dir.empty()) throw std::invalid_argument("TrainingLoop: work_dir is empty");
+  if (steps_per_round < 1) throw std::invalid_argument("TrainingLoop: steps_per_round must be >= 1");
+  if (threads < 1) throw std::invalid_argument("TrainingLoop: threads must be >= 1");
+  if (min_frames < 2) throw std::invalid_argument("TrainingLoop: min_frames must be >= 2");
+  if (val_every_nth < 2) throw std::invalid_argument("TrainingLoop: val_every_nth must be >= 2");
+  if (!warm_start.empty() && !fs::exists(warm_start))
+    throw std::invalid_argument("TrainingLoop: warm-start checkpoint " + warm_start +
+                                " does not exist");
+}
+
+std::string TrainingLoop::VersionPath(const std::string& work_dir, uint64_t version) {
+  char name[48];
+  std::snprintf(name, sizeof(name), "model_v%06llu.pt", static_cast<unsigned long long>(version));
+  return (fs::absolute(fs::path(work_dir) / "versions") / name).string();
+}
+
+TrainingLoop::TrainingLoop(const Options& options, ReplayBuffer* buffer,
+                           VersionCallback on_version, StatusCallback on_status)
+    : options_(options),
+      buffer_(buffer),
+      on_version_(std::move(on_version)),
+      on_status_(std::move(on_status)) {
+  options_.Validate();
+  status_.set_phase("idle");
+}
+
+TrainingLoop::~TrainingLoop() {
+  stop_ = true;
+  cv_.notify_all();
+  if (thread_.joinable()) thread_.join();
+}
+
+void TrainingLoop::Start() {
+  fs::create_directories(fs::path(options_.work_dir) / "versions");
+  version_ = HighestVersion(options_.work_dir);
+  const std::string ckpt = model::Trainer::CheckpointPath(options_.work_dir);
+  if (!options_.warm_start.empty() && !fs::exists(ckpt))
+    scene::WriteFileAtomic(ckpt, ReadFile(options_.warm_start));
+  thread_ = std::thread([this] { Main(); });
+}
+
+bool TrainingLoop::Stop(std::chrono::milliseconds wait) {
+  stop_ = true;
+  cv_.notify_all();
+  if (!thread_.joinable()) return true;
+  std::unique_lock<std::mutex> lock(mutex_);
+  cv_.wait_for(lock, wait, [this] { return finished_.load(); });
+  const bool done = finished_;
+  lock.unlock();
+  if (done) thread_.join();
+  return done;
+}
+
+std::string TrainingLoop::Error() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return error_;
+}
+
+msgs::pb::TrainerStatus TrainingLoop::LastStatus() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  msgs::pb::TrainerStatus s = status_;
+  s.set_buffer_size(buffer_->Size());
+  return s;
+}
+
+void TrainingLoop::SetPhase(const std::string& phase) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (status_.phase() == phase) return;
+    status_.set_phase(phase);
+  }
+  EmitStatus();
+}
+
+void TrainingLoop::EmitStatus() {
+  if (on_status_) on_status_(LastStatus());
+}
+
+void TrainingLoop::ReadLosses() {
+  // The trainer logs one JSON line per step; the last phase-1 step line has the losses.
+  std::ifstream in(options_.work_dir + "/train_log.jsonl", std::ios::binary);
+  if (!in) return;
+  in.seekg(0, std::ios::end);
+  const std::streamoff size = in.tellg();
+  const std::streamoff from = std::max<std::streamoff>(0, size - 16384);
+  in.seekg(from);
+  std::string line, last;
+  while (std::getline(in, line))
+    if (line.find("\"loss") != std::string::npos) last = line;
+  if (last.empty()) return;
+  try {
+    const auto j = nlohmann::json::parse(last);
+    std::lock_guard<std::mutex> lock(mutex_);
+    status_.clear_losses();
+    for (auto it = j.begin(); it != j.end(); ++it)
+      if (it.value().is_number() && it.key() != "phase" && it.key() != "step")
+        (*status_.mutable_losses())[it.key()] = it.value().get<double>();
+  } catch (const std::exception&) {
+    // a partial first line after seeking: no losses this time
+  }
+}
+
+void TrainingLoop::Main() {
+  try {
+    RunRounds();
+    SetPhase(stop_ ? "stopped" : "done");
+  } catch (const std::exception& e) {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      error_ = e.what();
+    }
+    SetPhase("error");
+  }
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    finished_ = true;
+  }
+  cv_.notify_all();
+}
+
+void TrainingLoop::RunRounds() {
+  const std::string ckpt = model::Trainer::CheckpointPath(options_.work_dir);
+  int step = 0;  // phase-1 step of the checkpoint
+  bool know_step = !fs::exists(ckpt);  // else a 0-step run reads it from the checkpoint
+  int rounds = 0;
+  while (!stop_ && (options_.max_rounds < 0 || rounds < options_.max_rounds)) {
+    scene::RgbdDataset all = buffer_->Snapshot();
+    if (all.frames.size() < options_.min_frames) {
+      SetPhase("waiting");
+      std::unique_lock<std::mutex> lock(mutex_);
+      cv_.wait_for(lock, std::chrono::milliseconds(100), [this] { return stop_.load(); });
+      continue;
+    }
+    scene::RgbdDataset train, val;
+    train.camera = val.camera = all.camera;
+    const size_t n = all.frames.size();
+    const bool hold_out = n >= 2 * static_cast<size_t>(options_.val_every_nth);
+    for (size_t i = 0; i < n; ++i) {
+      if (hold_out && i % options_.val_every_nth == options_.val_every_nth / 2)
+        val.frames.push_back(all.frames[i]);
+      else
+        train.frames.push_back(all.frames[i]);
+    }
+    SetPhase("training");
+    model::TrainerOptions t;
+    t.out_dir = options_.work_dir;
+    t.phase = 1;
+    t.steps = know_step ? step + options_.steps_per_round : 0;
+    t.threads = options_.threads;
+    t.resume = fs::exists(ckpt);
+    t.progress = false;
+    t.max_val_frames = options_.max_val_frames;
+    const auto t0 = std::chrono::steady_clock::now();
+    model::Trainer trainer(options_.config, t);
+    const model::TrainReport report = trainer.Run(train, val);
+    const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    if (!know_step) {
+      // Resumed (restart / warm start): learn the checkpoint's step, nothing trained yet.
+      step = report.phase1_steps;
+      know_step = true;
+      continue;
+    }
+    const int done = report.phase1_steps - step;
+    step = report.phase1_steps;
+    ++rounds;
+    ReadLosses();
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      status_.set_step(static_cast<uint64_t>(step));
+      status_.set_steps_per_s(seconds > 0 ? done / seconds : 0.0);
+    }
+    // Publish: a versioned copy, written atomically, that this loop never rewrites.
+    const uint64_t version = version_ + 1;
+    const std::string path = VersionPath(options_.work_dir, version);
+    scene::WriteFileAtomic(path, ReadFile(report.checkpoint_path));
+    version_ = version;
+    msgs::pb::ModelVersion mv;
+    mv.set_version(version);
+    mv.set_checkpoint_path(path);
+    mv.set_step(static_cast<uint64_t>(step));
+    mv.set_method("p2i_net");
+    mv.set_val_psnr(report.val_psnr);
+    mv.set_width(static_cast<uint32_t>(options_.config.resolution));
+    mv.set_height(static_cast<uint32_t>(options_.config.resolution));
+    if (on_version_) on_version_(mv);
+    EmitStatus();
+  }
+}
+
+}  // namespace p2i::trainer

@@ -1,0 +1,92 @@
+/// @file training_loop.h
+/// @brief Trains P2I-NET in rounds on a ReplayBuffer on its own thread and hands out a new
+/// model version (versioned checkpoint file + validation PSNR) after every round.
+#pragma once
+
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <functional>
+#include <map>
+#include <mutex>
+#include <string>
+#include <thread>
+
+#include "model/p2i_config.h"
+#include "msgs/p2i.pb.h"
+#include "nodes/trainer/replay_buffer.h"
+
+namespace p2i::trainer {
+
+/// Continuous training in rounds.
+///
+/// Each round snapshots the buffer (every `val_every_nth` frame held out for validation once
+/// the buffer has at least 2 * val_every_nth frames), runs model::Trainer (phase 1 only: G and
+/// D; ENET is not trained online) with `resume` so weights, optimiser state and RNG carry over,
+/// up to `steps_per_round` more steps, then copies work_dir/checkpoint.pt atomically to
+/// work_dir/versions/model_vNNNNNN.pt and calls `on_version`. A status (`on_status`) is emitted
+/// when the phase changes and after each round. Versions continue after a restart (the highest
+/// file in versions/ is found); the trainer resumes from work_dir/checkpoint.pt if present, else
+/// from `warm_start` (copied into the work dir first), else from scratch.
+///
+/// Stop: model::Trainer has no stop hook, so a round cannot be interrupted; Stop() waits up to a
+/// timeout and reports whether the thread ended. Published versions are never touched again, so
+/// abandoning a round (process exit) keeps them valid.
+///
+/// Thread-safety: Start/Stop from one thread; callbacks run on the training thread (the caller
+/// must make them thread-safe, e.g. with locking publishers); LastStatus() is thread-safe.
+class TrainingLoop {
+ public:
+  struct Options {
+    model::P2iConfig config;
+    std::string work_dir;
+    int steps_per_round = 200;
+    int threads = 1;              ///< torch threads for training
+    std::string warm_start;       ///< checkpoint to start from ("" = none)
+    size_t min_frames = 8;        ///< the loop waits until the buffer holds this many
+    int val_every_nth = 8;        ///< every n-th buffer frame is validation
+    int max_val_frames = 8;
+    int max_rounds = -1;          ///< stop after this many rounds (-1 = never; tests, offline)
+
+    void Validate() const;
+  };
+  using VersionCallback = std::function<void(const msgs::pb::ModelVersion&)>;
+  using StatusCallback = std::function<void(const msgs::pb::TrainerStatus&)>;
+
+  TrainingLoop(const Options& options, ReplayBuffer* buffer, VersionCallback on_version,
+               StatusCallback on_status);
+  ~TrainingLoop();  ///< Stop() and join (may block for the rest of a round)
+
+  void Start();
+  /// Asks the thread to stop and waits up to `wait`; true when it has ended.
+  bool Stop(std::chrono::milliseconds wait);
+  bool Finished() const { return finished_; }
+  /// The error that ended the thread ("" if none).
+  std::string Error() const;
+  msgs::pb::TrainerStatus LastStatus() const;
+  uint64_t LastVersion() const { return version_; }
+
+  static std::string VersionPath(const std::string& work_dir, uint64_t version);
+
+ private:
+  void Main();
+  void RunRounds();
+  void SetPhase(const std::string& phase);
+  void EmitStatus();
+  void ReadLosses();
+
+  Options options_;
+  ReplayBuffer* buffer_;
+  VersionCallback on_version_;
+  StatusCallback on_status_;
+  std::thread thread_;
+  std::atomic<bool> stop_{false};
+  std::atomic<bool> finished_{false};
+  std::atomic<uint64_t> version_{0};
+  mutable std::mutex mutex_;
+  std::condition_variable cv_;
+  msgs::pb::TrainerStatus status_;
+  std::string error_;
+};
+
+}  // namespace p2i::trainer
