@@ -1,0 +1,195 @@
+/// @file monitor_node.cc
+/// @brief p2i_monitor implementation.
+#include "nodes/monitor/monitor_node.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "model/metrics.h"
+#include "nodes/camera/msg_convert.h"
+#include "scene/image_ops.h"
+
+namespace p2i::nodes {
+namespace {
+
+double Median(std::vector<double> v) {
+  if (v.empty()) return std::nan("");
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
+
+/// Nearest-rank percentile, as model::LatencyRecorder.
+double Percentile(std::vector<double> v, double p) {
+  if (v.empty()) return std::nan("");
+  std::sort(v.begin(), v.end());
+  const size_t rank = static_cast<size_t>(std::ceil(p / 100.0 * v.size()));
+  return v[std::max<size_t>(rank, 1) - 1];
+}
+
+nlohmann::json NumberOrNull(double x) { return std::isfinite(x) ? nlohmann::json(x) : nullptr; }
+
+}  // namespace
+
+MonitorNode::MonitorNode(const runtime::NodeArgs& args) : Node("monitor", args) {
+  duration_s_ = Declare<double>("duration", 120.0, "seconds until the summary; 0 = until stopped");
+  const std::string scene_spec =
+      Declare<std::string>("scene", "builtin:small_office", "ground truth: builtin:NAME or YAML");
+  const int width = Declare<int>("camera_width", 640, "sim camera width (as the camera node)");
+  const int height = Declare<int>("camera_height", 480, "sim camera height (as the camera node)");
+  const std::string lpips_path = Declare<std::string>(
+      "lpips_weights", "", "LPIPS-Squeeze weights; '' = $P2I_LPIPS_WEIGHTS; missing = not scored");
+  score_every_ = Declare<int>("score_every", 1, "score every N-th view (ground truth costs CPU)");
+  summary_file_ = Declare<std::string>("summary_file", "", "write the summary JSON here");
+  sink_summary_file_ =
+      Declare<std::string>("sink_summary", "", "slam_sink summary.json to report from");
+  sequence_dir_ = Declare<std::string>("sequence_dir", "", "where slam_sink writes (reported)");
+  if (duration_s_ < 0 || width <= 0 || height <= 0 || score_every_ < 1) {
+    throw runtime::StartupError("duration >= 0, camera_width/height > 0, score_every >= 1");
+  }
+  const std::string prefix = "builtin:";
+  try {
+    sim_.emplace(scene_spec.rfind(prefix, 0) == 0
+                     ? scene::SimScene::BuiltIn(scene_spec.substr(prefix.size()))
+                     : scene::SimScene::FromYamlFile(scene_spec));
+  } catch (const std::exception& e) {
+    throw runtime::StartupError("scene '" + scene_spec + "': " + e.what());
+  }
+  // The camera node's default sim camera (nodes/camera): f = 525 at 640 px, centred.
+  const double f = 525.0 * width / 640.0;
+  sim_camera_ =
+      scene::CameraInfo::Pinhole(width, height, f, f, (width - 1) / 2.0, (height - 1) / 2.0, "sim");
+  lpips_ = model::LpipsSqueeze::TryLoad(lpips_path, &lpips_status_);
+  if (lpips_) {
+    lpips_status_ = "LPIPS-Squeeze from " + lpips_->weights_path();
+  }
+  Log().info("{}", lpips_status_);
+
+  views_sub_ = Subscribe<msgs::View>("views", [this](const msgs::View& v) { OnView(v); });
+  frames_sub_ = Subscribe<msgs::RgbdFrame>("rgbd", [this](const msgs::RgbdFrame&) {
+    ++frames_captured_;
+  });
+  versions_sub_ = Subscribe<msgs::pb::ModelVersion>(
+      "model_version",
+      [this](const msgs::pb::ModelVersion& mv) { versions_published_.insert(mv.version()); });
+  start_ = std::chrono::steady_clock::now();
+  if (duration_s_ > 0) {
+    AddTimer(std::chrono::milliseconds(200), [this] {
+      const double elapsed =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+      if (elapsed >= duration_s_) Finish();
+    });
+  }
+}
+
+void MonitorNode::OnView(const msgs::View& view) {
+  ++views_received_;
+  versions_served_.insert(view.meta.model_version());
+  render_ms_.push_back(view.meta.render_ms());
+  latency_ms_.push_back(view.meta.queue_ms() + view.meta.render_ms());
+  coverage_.push_back(view.meta.coverage());
+  SetValue("views", static_cast<double>(views_received_));
+  if ((views_received_ - 1) % score_every_ != 0) return;
+
+  const cv::Mat rgb = ToMat(view.rgb);
+  const cv::Mat depth_raw = ToMat(view.depth);
+  cv::Mat depth;
+  if (view.depth.encoding == msgs::pb::DEPTH16U) {
+    depth_raw.convertTo(depth, CV_32F, view.depth.depth_scale);
+  } else {
+    depth = depth_raw;
+  }
+  scene::RgbdSample truth = sim_->Render(FromMsg(view.meta.pose()), sim_camera_);
+  truth = scene::CenterCropResizeSample(truth, rgb.cols, rgb.rows);
+  psnr_.push_back(model::Psnr(rgb, truth.rgb));
+  ssim_.push_back(model::Ssim(rgb, truth.rgb));
+  if (lpips_ && rgb.cols >= 16 && rgb.rows >= 16) {
+    lpips_values_.push_back(lpips_->Distance(rgb, truth.rgb));
+  }
+  const model::DepthErrors de = model::ComputeDepthErrors(depth, truth.depth);
+  if (std::isfinite(de.abs_rel)) depth_absrel_.push_back(de.abs_rel);
+  ++views_scored_;
+}
+
+std::string MonitorNode::SummaryText() const {
+  std::ostringstream os;
+  char line[256];
+  const double elapsed =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  os << "==== p2i demo summary (" << static_cast<int>(elapsed) << " s) ====\n";
+  os << "frames captured:           " << frames_captured_ << "\n";
+  os << "model versions published:  " << versions_published_.size() << "\n";
+  os << "model versions served:     " << versions_served_.size() << " (";
+  for (auto v : versions_served_) os << " " << v;
+  os << " )\n";
+  os << "views served:              " << views_received_ << " (" << views_scored_
+     << " scored against the sim ground truth)\n";
+  std::snprintf(line, sizeof(line), "latency (queue+render) ms: p50 %.1f  p99 %.1f\n",
+                Median(latency_ms_), Percentile(latency_ms_, 99));
+  os << line;
+  std::snprintf(line, sizeof(line), "PSNR dB (median):          %.2f\n", Median(psnr_));
+  os << line;
+  std::snprintf(line, sizeof(line), "SSIM (median):             %.3f\n", Median(ssim_));
+  os << line;
+  if (lpips_) {
+    std::snprintf(line, sizeof(line), "LPIPS-Squeeze (median):    %.3f\n", Median(lpips_values_));
+    os << line;
+  } else {
+    os << "LPIPS-Squeeze:             missing (" << lpips_status_ << ")\n";
+  }
+  std::snprintf(line, sizeof(line), "depth AbsRel (median):     %.3f\n", Median(depth_absrel_));
+  os << line;
+  if (!sink_summary_file_.empty() && std::filesystem::exists(sink_summary_file_)) {
+    try {
+      std::ifstream in(sink_summary_file_);
+      const nlohmann::json s = nlohmann::json::parse(in);
+      os << "slam_sink summary:         " << s.dump() << "\n";
+    } catch (const std::exception& e) {
+      os << "slam_sink summary:         unreadable (" << e.what() << ")\n";
+    }
+  }
+  if (!sequence_dir_.empty()) os << "TUM sequence written to:   " << sequence_dir_ << "\n";
+  return os.str();
+}
+
+void MonitorNode::Finish() {
+  if (finished_) return;
+  finished_ = true;
+  const std::string text = SummaryText();
+  std::fputs(text.c_str(), stdout);
+  std::fflush(stdout);
+  if (!summary_file_.empty()) {
+    nlohmann::json j;
+    j["frames_captured"] = frames_captured_;
+    j["model_versions_published"] = versions_published_.size();
+    j["model_versions_served"] = std::vector<uint64_t>(versions_served_.begin(),
+                                                       versions_served_.end());
+    j["views_served"] = views_received_;
+    j["views_scored"] = views_scored_;
+    j["latency_ms_p50"] = NumberOrNull(Median(latency_ms_));
+    j["latency_ms_p99"] = NumberOrNull(Percentile(latency_ms_, 99));
+    j["psnr_db_median"] = NumberOrNull(Median(psnr_));
+    j["ssim_median"] = NumberOrNull(Median(ssim_));
+    j["lpips_squeeze_median"] = lpips_ ? NumberOrNull(Median(lpips_values_)) : nullptr;
+    j["depth_absrel_median"] = NumberOrNull(Median(depth_absrel_));
+    j["sequence_dir"] = sequence_dir_;
+    const std::string tmp = summary_file_ + ".tmp";
+    {
+      std::ofstream out(tmp);
+      out << j.dump(2) << "\n";
+    }
+    std::filesystem::rename(tmp, summary_file_);
+  }
+  Stop();
+}
+
+void MonitorNode::OnShutdown() {
+  if (!finished_) Finish();
+}
+
+}  // namespace p2i::nodes

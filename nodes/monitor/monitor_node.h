@@ -1,0 +1,61 @@
+/// @file monitor_node.h
+/// @brief p2i_monitor: watches a running pipeline and prints what it achieved.
+#pragma once
+
+#include <chrono>
+#include <map>
+#include <memory>
+#include <optional>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "model/lpips.h"
+#include "nodes/runtime/node.h"
+#include "scene/camera_info.h"
+#include "scene/sim_scene.h"
+
+namespace p2i::nodes {
+
+/// Scores every synthesized view against the sim scene's exact ground truth at the view's pose
+/// (PSNR, SSIM, LPIPS-Squeeze when the weights are found, depth AbsRel), counts captured frames,
+/// published and served model versions, view latency, and after `duration` seconds prints a
+/// summary (also written as JSON) and stops, so a launch file can mark it `required` to bound a
+/// run. The ground truth is rendered with the sim camera and centre-cropped/resized to each
+/// view's size: the same path the training frames take.
+/// Thread-compatible: everything runs on the node's executor thread.
+class MonitorNode : public runtime::Node {
+ public:
+  explicit MonitorNode(const runtime::NodeArgs& args);
+
+ protected:
+  void OnShutdown() override;
+
+ private:
+  void OnView(const msgs::View& view);
+  void Finish();
+  std::string SummaryText() const;
+
+  std::optional<scene::SimScene> sim_;
+  scene::CameraInfo sim_camera_;
+  std::unique_ptr<model::LpipsSqueeze> lpips_;
+  std::string lpips_status_;
+  std::string summary_file_;
+  std::string sink_summary_file_;
+  std::string sequence_dir_;
+  double duration_s_ = 0.0;
+  int score_every_ = 1;
+  std::chrono::steady_clock::time_point start_;
+  bool finished_ = false;
+
+  uint64_t frames_captured_ = 0;
+  uint64_t views_received_ = 0;
+  uint64_t views_scored_ = 0;
+  std::set<uint64_t> versions_published_;
+  std::set<uint64_t> versions_served_;
+  std::vector<double> psnr_, ssim_, lpips_values_, depth_absrel_, latency_ms_, render_ms_;
+  std::vector<double> coverage_;
+  std::shared_ptr<runtime::RawSubscriber> views_sub_, frames_sub_, versions_sub_;
+};
+
+}  // namespace p2i::nodes
