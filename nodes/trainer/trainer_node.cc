@@ -115,13 +115,16 @@ TrainerNode::TrainerNode(const runtime::NodeArgs& args) : Node("trainer", args) 
   loop_ = std::make_unique<TrainingLoop>(
       o, buffer_.get(),
       [this](const msgs::pb::ModelVersion& v) {
+        if (closing_) return;  // a round that ended during shutdown: its file stays on disk
         version_pub_->Publish(v);
         Count("versions_published");
         SetValue("val_psnr", v.val_psnr());
         Log().info("model version {} (step {}, val PSNR {:.2f} dB): {}", v.version(), v.step(),
                    v.val_psnr(), v.checkpoint_path());
       },
-      [this](const msgs::pb::TrainerStatus& s) { status_pub_->Publish(s); });
+      [this](const msgs::pb::TrainerStatus& s) {
+        if (!closing_) status_pub_->Publish(s);
+      });
   if (status_period > 0)
     AddTimer(std::chrono::nanoseconds(static_cast<int64_t>(status_period * 1e9)),
              [this] { status_pub_->Publish(loop_->LastStatus()); });
@@ -153,6 +156,7 @@ void TrainerNode::OnFrame(const msgs::RgbdFrame& frame) {
 
 void TrainerNode::OnShutdown() {
   if (!loop_) return;
+  closing_ = true;
   const bool stopped =
       loop_->Stop(std::chrono::milliseconds(static_cast<int64_t>(shutdown_wait_s_ * 1000)));
   if (!stopped)

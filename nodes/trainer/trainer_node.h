@@ -3,6 +3,7 @@
 /// (offline), continuous training, ModelVersion / TrainerStatus publishing.
 #pragma once
 
+#include <atomic>
 #include <memory>
 
 #include "nodes/runtime/node.h"
@@ -32,6 +33,8 @@ class TrainerNode : public runtime::Node {
   void OnFrame(const msgs::RgbdFrame& frame);
 
   double shutdown_wait_s_ = 1.0;
+  /// Set in OnShutdown: the training thread no longer publishes (sockets are about to close).
+  std::atomic<bool> closing_{false};
   std::unique_ptr<ReplayBuffer> buffer_;
   std::unique_ptr<TrainingLoop> loop_;
   std::shared_ptr<runtime::Publisher<msgs::pb::ModelVersion>> version_pub_;
