@@ -60,12 +60,16 @@ TEST_CASE("p2i_trainer: offline data at 32x32 publishes a ModelVersion, SIGTERM 
     _exit(127);
   }
   REQUIRE(pid > 0);
+  // A version, and a status that shows the whole capture in the buffer (either may come first).
+  const auto got_all = [&] {
+    return !versions.empty() && !statuses.empty() && statuses.back().buffer_size() == 16;
+  };
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(45);
-  while (std::chrono::steady_clock::now() < deadline && versions.empty())
+  while (std::chrono::steady_clock::now() < deadline && !got_all())
     listener.SpinOnce(std::chrono::milliseconds(20));
   int status = 0;
   const bool alive = waitpid(pid, &status, WNOHANG) == 0;
-  if (versions.empty() || !alive) {
+  if (!got_all() || !alive) {
     if (alive) kill(pid, SIGKILL), waitpid(pid, &status, 0);
     std::ifstream in(err_path);
     std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
@@ -74,8 +78,6 @@ TEST_CASE("p2i_trainer: offline data at 32x32 publishes a ModelVersion, SIGTERM 
   CHECK(versions.front().version() >= 1);
   CHECK(versions.front().width() == 32);
   CHECK(std::filesystem::exists(versions.front().checkpoint_path()));
-  CHECK_FALSE(statuses.empty());
-  CHECK(statuses.back().buffer_size() == 16);
 
   kill(pid, SIGTERM);
   // Generous bound: the test must not depend on timing, only on a clean exit.

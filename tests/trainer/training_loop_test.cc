@@ -99,5 +99,25 @@ TEST_CASE("TrainingLoop: rounds on a growing buffer publish loadable, increasing
     CHECK(more[0].version() == 4);
     CHECK(more[0].step() == 24);
   }
+  // Warm start: a fresh work dir starting from version 3's checkpoint continues from its step.
+  {
+    TrainingLoop::Options o;
+    o.config = testing::TinyConfig();
+    o.work_dir = dir + "/warm";
+    o.warm_start = versions[2].checkpoint_path();
+    o.steps_per_round = 6;
+    o.max_rounds = 1;
+    o.max_val_frames = 4;
+    std::vector<msgs::pb::ModelVersion> warm;
+    TrainingLoop loop(o, &reloaded, [&](const msgs::pb::ModelVersion& v) { warm.push_back(v); },
+                      nullptr);
+    loop.Start();
+    while (!loop.Finished()) std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    REQUIRE(loop.Error() == "");
+    REQUIRE(warm.size() == 1);
+    CHECK(warm[0].version() == 1);
+    CHECK(warm[0].step() == 24);
+    CHECK(std::filesystem::exists(o.work_dir + "/checkpoint.pt"));
+  }
   std::filesystem::remove_all(dir);
 }
