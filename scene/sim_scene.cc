@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <filesystem>
 #include <limits>
 #include <stdexcept>
 
@@ -147,6 +148,25 @@ SimScene SimScene::BuiltIn(const std::string& name) {
 }
 
 std::vector<std::string> SimScene::BuiltInNames() { return BuiltInSceneNames(); }
+
+SimScene SimScene::FromSpec(const std::string& spec) {
+  const std::string prefix = "builtin:";
+  if (spec.rfind(prefix, 0) == 0) return BuiltIn(spec.substr(prefix.size()));
+  for (const std::string& name : BuiltInNames()) {
+    if (spec == name && !std::filesystem::exists(spec)) return BuiltIn(name);
+  }
+  if (!std::filesystem::exists(spec)) {
+    std::string names;
+    for (const std::string& n : BuiltInNames()) names += " builtin:" + n;
+    throw std::runtime_error("scene '" + spec + "' is not a file; built-in scenes:" + names);
+  }
+  return FromYamlFile(spec);
+}
+
+CameraInfo SimScene::DefaultCamera(int width, int height) {
+  const double f = 525.0 * width / 640.0;
+  return CameraInfo::Pinhole(width, height, f, f, (width - 1) / 2.0, (height - 1) / 2.0, "sim");
+}
 
 const std::string& SimScene::BuiltInYaml(const std::string& name) { return BuiltInSceneYaml(name); }
 

@@ -50,6 +50,12 @@ class SimScene {
   static std::vector<std::string> BuiltInNames();
   /// The embedded YAML text of a built-in scene.
   static const std::string& BuiltInYaml(const std::string& name);
+  /// What users write in parameters and on command lines: "builtin:NAME", a bare built-in name
+  /// (when no file of that name exists), or a scene YAML file. Throws std::runtime_error listing
+  /// the built-in scenes when `spec` is neither.
+  static SimScene FromSpec(const std::string& spec);
+  /// The sim camera (calib/sim.yaml: f = 525 at 640 px, centred principal point) at width x height.
+  static CameraInfo DefaultCamera(int width = 640, int height = 480);
 
   /// Renders the view from `camera_to_world`. `camera` must have positive size and focal
   /// lengths (std::invalid_argument otherwise). The sample's pose is the input pose, stamp 0.

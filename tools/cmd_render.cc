@@ -17,21 +17,6 @@
 namespace p2i::tools {
 namespace {
 
-/// "builtin:NAME", a bare built-in name, or a scene YAML file.
-scene::SimScene LoadScene(const std::string& spec) {
-  const std::string prefix = "builtin:";
-  if (spec.rfind(prefix, 0) == 0) return scene::SimScene::BuiltIn(spec.substr(prefix.size()));
-  for (const std::string& name : scene::SimScene::BuiltInNames()) {
-    if (spec == name && !std::filesystem::exists(spec)) return scene::SimScene::BuiltIn(name);
-  }
-  if (!std::filesystem::exists(spec)) {
-    std::string names;
-    for (const std::string& n : scene::SimScene::BuiltInNames()) names += " builtin:" + n;
-    throw std::runtime_error("scene '" + spec + "' is not a file; built-in scenes:" + names);
-  }
-  return scene::SimScene::FromYamlFile(spec);
-}
-
 int RunRender(const std::vector<std::string>& args) {
   CLI::App app{"Render p2i capture datasets (one seq-NN folder per trajectory) from the "
                "synthetic scene. See docs/DATASETS.md.",
@@ -72,7 +57,7 @@ int RunRender(const std::vector<std::string>& args) {
     throw std::invalid_argument("--fps, --max-frames, --width and --height must not be negative");
   }
 
-  scene::SimScene sim = LoadScene(scene_spec);
+  scene::SimScene sim = scene::SimScene::FromSpec(scene_spec);
   if (kinect) sim.set_sensor_options(scene::SimSensorOptions::Kinect());
   scene::CameraInfo camera;
   if (!camera_file.empty()) {
@@ -83,10 +68,8 @@ int RunRender(const std::vector<std::string>& args) {
                              height > 0 ? height : camera.image_height);
     }
   } else {
-    const int w = width > 0 ? width : 640, h = height > 0 ? height : 480;
     // Kinect-like 58 degree horizontal field of view at any size, square pixels.
-    const double f = 525.0 * w / 640.0;
-    camera = scene::CameraInfo::Pinhole(w, h, f, f, (w - 1) / 2.0, (h - 1) / 2.0, "sim");
+    camera = scene::SimScene::DefaultCamera(width > 0 ? width : 640, height > 0 ? height : 480);
   }
   camera.Validate();
 

@@ -16,16 +16,6 @@ std::chrono::nanoseconds Period(double rate_hz) {
   return std::chrono::nanoseconds(static_cast<int64_t>(1e9 / rate_hz));
 }
 
-scene::SimScene LoadSceneSpec(const std::string& spec) {
-  const std::string prefix = "builtin:";
-  if (spec.rfind(prefix, 0) == 0) return scene::SimScene::BuiltIn(spec.substr(prefix.size()));
-  if (!std::filesystem::exists(spec)) {
-    throw runtime::StartupError("scene '" + spec +
-                                "' is not a file (use builtin:small_office or builtin:large_office)");
-  }
-  return scene::SimScene::FromYamlFile(spec);
-}
-
 }  // namespace
 
 CameraNode::CameraNode(const runtime::NodeArgs& args) : Node("camera", args) {
@@ -70,15 +60,13 @@ void CameraNode::SetUpSim() {
     throw runtime::StartupError("rate must be > 0, width and height >= 0");
   }
   try {
-    sim_.emplace(LoadSceneSpec(scene_spec));
+    sim_.emplace(scene::SimScene::FromSpec(scene_spec));
     if (kinect) sim_->set_sensor_options(scene::SimSensorOptions::Kinect());
     if (!camera_file.empty()) {
       camera_ = scene::CameraInfo::FromYamlFile(camera_file);
       if (width > 0 && height > 0) camera_ = camera_.Scaled(width, height);
     } else {
-      const int w = width > 0 ? width : 640, h = height > 0 ? height : 480;
-      const double f = 525.0 * w / 640.0;
-      camera_ = scene::CameraInfo::Pinhole(w, h, f, f, (w - 1) / 2.0, (h - 1) / 2.0, "sim");
+      camera_ = scene::SimScene::DefaultCamera(width > 0 ? width : 640, height > 0 ? height : 480);
     }
     if (pose_mode == "trajectory") {
       auto all = scene::ResolveTrajectorySpec(spec, &*sim_);

@@ -52,18 +52,13 @@ MonitorNode::MonitorNode(const runtime::NodeArgs& args) : Node("monitor", args) 
   if (duration_s_ < 0 || width <= 0 || height <= 0 || score_every_ < 1) {
     throw runtime::StartupError("duration >= 0, camera_width/height > 0, score_every >= 1");
   }
-  const std::string prefix = "builtin:";
   try {
-    sim_.emplace(scene_spec.rfind(prefix, 0) == 0
-                     ? scene::SimScene::BuiltIn(scene_spec.substr(prefix.size()))
-                     : scene::SimScene::FromYamlFile(scene_spec));
+    sim_.emplace(scene::SimScene::FromSpec(scene_spec));
   } catch (const std::exception& e) {
-    throw runtime::StartupError("scene '" + scene_spec + "': " + e.what());
+    throw runtime::StartupError(e.what());
   }
-  // The camera node's default sim camera (nodes/camera): f = 525 at 640 px, centred.
-  const double f = 525.0 * width / 640.0;
-  sim_camera_ =
-      scene::CameraInfo::Pinhole(width, height, f, f, (width - 1) / 2.0, (height - 1) / 2.0, "sim");
+  // The camera node's default sim camera.
+  sim_camera_ = scene::SimScene::DefaultCamera(width, height);
   lpips_ = model::LpipsSqueeze::TryLoad(lpips_path, &lpips_status_);
   if (lpips_) {
     lpips_status_ = "LPIPS-Squeeze from " + lpips_->weights_path();

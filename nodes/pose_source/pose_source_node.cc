@@ -16,16 +16,10 @@ std::chrono::nanoseconds Period(double rate_hz) {
   return std::chrono::nanoseconds(static_cast<int64_t>(1e9 / rate_hz));
 }
 
-scene::SimScene LoadSceneSpec(const std::string& spec) {
-  const std::string prefix = "builtin:";
-  if (spec.rfind(prefix, 0) == 0) return scene::SimScene::BuiltIn(spec.substr(prefix.size()));
-  return scene::SimScene::FromYamlFile(spec);
-}
-
 std::vector<scene::StampedPose> LoadOne(const std::string& spec, int index,
                                         const std::string& scene_spec, const char* param) {
   std::optional<scene::SimScene> sim;
-  if (spec.find("random_walk") != std::string::npos) sim.emplace(LoadSceneSpec(scene_spec));
+  if (spec.find("random_walk") != std::string::npos) sim.emplace(scene::SimScene::FromSpec(scene_spec));
   auto all = scene::ResolveTrajectorySpec(spec, sim ? &*sim : nullptr);
   if (index < 0 || static_cast<size_t>(index) >= all.size()) {
     throw runtime::StartupError(std::string(param) + "_index " + std::to_string(index) +

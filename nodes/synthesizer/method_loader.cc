@@ -15,9 +15,7 @@
 namespace p2i::nodes {
 
 scene::CameraInfo BuiltinCamera(int width, int height) {
-  const double f = 525.0 * width / 640.0;
-  return scene::CameraInfo::Pinhole(width, height, f, f, (width - 1) / 2.0, (height - 1) / 2.0,
-                                    "sim");
+  return scene::SimScene::DefaultCamera(width, height);
 }
 
 scene::RgbdDataset LoadTrainingData(const std::string& spec, int width, int height,
