@@ -12,61 +12,13 @@
 #include "model/checkpoint.h"
 #include "model/p2i_synthesizer.h"
 #include "model/trainer.h"
+#include "tests/model/model_test_util.h"
 
 namespace fs = std::filesystem;
 using namespace p2i::model;
+using namespace p2i::model::testing;
 
 namespace {
-
-std::string TempDir(const std::string& name) {
-  const auto dir = fs::temp_directory_path() / ("p2i_model_test_" + name + "_" +
-                                                std::to_string(::getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir.string();
-}
-
-P2iConfig TinyConfig() {
-  P2iConfig c;
-  c.name = "tiny";
-  c.resolution = 32;
-  c.g_schedule = "custom";
-  c.g_widths = {16, 16, 8, 8};
-  c.g_fc_width = 16;
-  c.d_base_width = 8;
-  c.d_max_width = 16;
-  c.latent_dim = 32;
-  c.mapping_width = 16;
-  c.enet_width = 8;
-  c.enet_blocks = 1;
-  c.batch_size = 4;
-  c.val_every = 5;
-  c.checkpoint_every = 3;
-  c.Validate();
-  return c;
-}
-
-TrainerOptions Quiet(const std::string& dir, int steps, int phase = 1) {
-  TrainerOptions o;
-  o.out_dir = dir;
-  o.steps = steps;
-  o.phase = phase;
-  o.threads = 1;
-  o.progress = false;
-  o.max_val_frames = 4;
-  return o;
-}
-
-bool SameParameters(torch::nn::Module& a, torch::nn::Module& b) {
-  auto pa = a.named_parameters(), pb = b.named_parameters();
-  if (pa.size() != pb.size()) return false;
-  for (const auto& kv : pa)
-    if (!torch::equal(kv.value(), pb[kv.key()])) return false;
-  auto ba = a.named_buffers(), bb = b.named_buffers();
-  for (const auto& kv : ba)
-    if (!torch::equal(kv.value(), bb[kv.key()])) return false;
-  return true;
-}
 
 std::string ReadAll(const std::string& path) {
   std::ifstream in(path);
