@@ -19,50 +19,14 @@
 #include "scene/sim_scene.h"
 #include "scene/trajectory.h"
 #include "tests/runtime/test_util.h"
+#include "tests/process_util.h"
 #include "tests/test_paths.h"
-
-extern char** environ;
 
 namespace p2i::nodes {
 namespace {
 
+using p2i::testing::Process;
 using runtime::testing::ScopedRunDir;
-
-/// A child process started with posix_spawn; SIGTERM + wait on destruction if still running.
-class Process {
- public:
-  explicit Process(std::vector<std::string> argv) {
-    std::vector<char*> args;
-    for (std::string& a : argv) args.push_back(a.data());
-    args.push_back(nullptr);
-    if (posix_spawn(&pid_, args[0], nullptr, nullptr, args.data(), environ) != 0) pid_ = -1;
-  }
-  ~Process() {
-    if (pid_ > 0) Terminate();
-  }
-  /// SIGTERM, then the exit code (or -signal).
-  int Terminate() {
-    if (pid_ <= 0) return -1000;
-    kill(pid_, SIGTERM);
-    int status = 0;
-    waitpid(pid_, &status, 0);
-    pid_ = -1;
-    return WIFEXITED(status) ? WEXITSTATUS(status) : -WTERMSIG(status);
-  }
-  /// Waits for the process to exit by itself; its exit code (or -signal).
-  int Wait() {
-    if (pid_ <= 0) return -1000;
-    int status = 0;
-    waitpid(pid_, &status, 0);
-    pid_ = -1;
-    return WIFEXITED(status) ? WEXITSTATUS(status) : -WTERMSIG(status);
-  }
-  bool Running() const { return pid_ > 0 && kill(pid_, 0) == 0; }
-  pid_t pid() const { return pid_; }
-
- private:
-  pid_t pid_ = -1;
-};
 
 std::string Bin(const std::string& name) { return p2i::testing::BinDir() + "/" + name; }
 

@@ -14,24 +14,8 @@
 #include <catch2/catch.hpp>
 
 #include "tests/runtime/test_util.h"
+#include "tests/process_util.h"
 #include "tests/test_paths.h"
-
-namespace {
-
-/// Runs a shell command and returns its stdout; `*code` receives the exit status.
-std::string Run(const std::string& command, int* code) {
-  std::string out;
-  FILE* pipe = popen(command.c_str(), "r");
-  REQUIRE(pipe != nullptr);
-  std::array<char, 4096> buf{};
-  size_t n = 0;
-  while ((n = fread(buf.data(), 1, buf.size(), pipe)) > 0) out.append(buf.data(), n);
-  const int status = pclose(pipe);
-  *code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return out;
-}
-
-}  // namespace
 
 TEST_CASE("p2i topic list, echo and hz on a running pose_source", "[integration]") {
   p2i::runtime::testing::ScopedRunDir run_dir;  // sets P2I_RUN_DIR for us and the children
@@ -50,7 +34,7 @@ TEST_CASE("p2i topic list, echo and hz on a running pose_source", "[integration]
   std::string list;
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
   while (std::chrono::steady_clock::now() < deadline) {
-    list = Run(p2i + " topic list -t 2>&1", &code);
+    list = p2i::testing::RunCommand(p2i + " topic list -t 2>&1", &code);
     if (list.find("/pose") != std::string::npos) break;
     std::this_thread::sleep_for(std::chrono::milliseconds(100));
   }
@@ -60,14 +44,14 @@ TEST_CASE("p2i topic list, echo and hz on a running pose_source", "[integration]
   CHECK(list.find("/pose_source/status") != std::string::npos);
 
   // echo --once prints one decoded PoseStamped with its header and position.
-  const std::string echo = Run(p2i + " topic echo /pose --once 2>&1", &code);
+  const std::string echo = p2i::testing::RunCommand(p2i + " topic echo /pose --once 2>&1", &code);
   INFO(echo);
   CHECK(code == 0);
   CHECK(echo.find("seq") != std::string::npos);
   CHECK(echo.find("position") != std::string::npos);
 
   // hz measures the configured 20 Hz (loose bounds: a loaded 2-core box).
-  const std::string hz = Run(p2i + " topic hz /pose --duration 3 2>&1", &code);
+  const std::string hz = p2i::testing::RunCommand(p2i + " topic hz /pose --duration 3 2>&1", &code);
   INFO(hz);
   CHECK(code == 0);
   std::smatch m;
@@ -77,7 +61,7 @@ TEST_CASE("p2i topic list, echo and hz on a running pose_source", "[integration]
   CHECK(rate < 28.0);
 
   // A topic nobody publishes is an error for echo, not a hang.
-  Run(p2i + " topic echo /no_such_topic --once --timeout 1 2>&1", &code);
+  p2i::testing::RunCommand(p2i + " topic echo /no_such_topic --once --timeout 1 2>&1", &code);
   CHECK(code != 0);
 
   kill(pid, SIGTERM);

@@ -14,23 +14,12 @@
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
 
+#include "tests/process_util.h"
 #include "tests/test_paths.h"
 
 namespace fs = std::filesystem;
 
 namespace {
-
-std::string Run(const std::string& command, int* code) {
-  std::string out;
-  FILE* pipe = popen(command.c_str(), "r");
-  REQUIRE(pipe != nullptr);
-  std::array<char, 4096> buf{};
-  size_t n = 0;
-  while ((n = fread(buf.data(), 1, buf.size(), pipe)) > 0) out.append(buf.data(), n);
-  const int status = pclose(pipe);
-  *code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return out;
-}
 
 constexpr const char* kTinyConfig = R"(name: tiny
 model: p2i_net
@@ -64,7 +53,7 @@ TEST_CASE("p2i train writes a progress bar, a JSON-lines log and a checkpoint; -
                            " --data procedural --frames 16 --threads 1 --out " +
                            (dir / "run").string();
   int code = -1;
-  const std::string out = Run(base + " 2>&1", &code);
+  const std::string out = p2i::testing::RunCommand(base + " 2>&1", &code);
   INFO(out);
   REQUIRE(code == 0);
   CHECK(out.find("phase1") != std::string::npos);  // the progress bar
@@ -82,7 +71,7 @@ TEST_CASE("p2i train writes a progress bar, a JSON-lines log and a checkpoint; -
   CHECK(end);
 
   // --resume to more phase-1 steps continues from the checkpoint's step.
-  const std::string resumed = Run(base + " --phase 1 --steps 9 --resume --quiet 2>&1", &code);
+  const std::string resumed = p2i::testing::RunCommand(base + " --phase 1 --steps 9 --resume --quiet 2>&1", &code);
   INFO(resumed);
   CHECK(code == 0);
   CHECK(resumed.find("phase 1 9 steps") != std::string::npos);
@@ -91,7 +80,7 @@ TEST_CASE("p2i train writes a progress bar, a JSON-lines log and a checkpoint; -
   {
     std::ofstream(dir / "bad.yaml") << std::string(kTinyConfig) << "widht: 3\n";
   }
-  const std::string bad = Run(p2i + " train " + (dir / "bad.yaml").string() +
+  const std::string bad = p2i::testing::RunCommand(p2i + " train " + (dir / "bad.yaml").string() +
                                   " --data procedural --out " + (dir / "bad").string() + " 2>&1",
                               &code);
   INFO(bad);

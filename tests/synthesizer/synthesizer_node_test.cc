@@ -20,40 +20,14 @@
 #include "nodes/runtime/service_client.h"
 #include "scene/trajectory.h"
 #include "tests/runtime/test_util.h"
+#include "tests/process_util.h"
 #include "tests/test_paths.h"
-
-extern char** environ;
 
 namespace p2i::nodes {
 namespace {
 
+using p2i::testing::Process;
 using runtime::testing::ScopedRunDir;
-
-/// A child process; SIGTERM + wait on destruction if still running.
-class Process {
- public:
-  explicit Process(std::vector<std::string> argv) {
-    std::vector<char*> args;
-    for (std::string& a : argv) args.push_back(a.data());
-    args.push_back(nullptr);
-    if (posix_spawn(&pid_, args[0], nullptr, nullptr, args.data(), environ) != 0) pid_ = -1;
-  }
-  ~Process() {
-    if (pid_ > 0) Terminate();
-  }
-  int Terminate() {
-    if (pid_ <= 0) return -1000;
-    kill(pid_, SIGTERM);
-    int status = 0;
-    waitpid(pid_, &status, 0);
-    pid_ = -1;
-    return WIFEXITED(status) ? WEXITSTATUS(status) : -WTERMSIG(status);
-  }
-  pid_t pid() const { return pid_; }
-
- private:
-  pid_t pid_ = -1;
-};
 
 TEST_CASE("p2i_synthesizer serves nearest-keyframe views over the render service and topics",
           "[integration]") {
