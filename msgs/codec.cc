@@ -546,22 +546,6 @@ bool ValidateAny(const WireMessage& wire, pb::MsgType type, Failure* f) {
   }
 }
 
-std::unique_ptr<gpb::Message> NewMeta(pb::MsgType type) {
-  switch (type) {
-    case pb::POSE: return std::make_unique<pb::PoseStamped>();
-    case pb::CAMERA_INFO: return std::make_unique<pb::CameraInfo>();
-    case pb::RGBD_FRAME: return std::make_unique<pb::RgbdFrame>();
-    case pb::POSE_REQUEST: return std::make_unique<pb::PoseRequest>();
-    case pb::VIEW: return std::make_unique<pb::View>();
-    case pb::MODEL_VERSION: return std::make_unique<pb::ModelVersion>();
-    case pb::TRAINER_STATUS: return std::make_unique<pb::TrainerStatus>();
-    case pb::NODE_STATUS: return std::make_unique<pb::NodeStatus>();
-    case pb::RENDER_REQUEST: return std::make_unique<pb::RenderRequest>();
-    case pb::RENDER_REPLY: return std::make_unique<pb::RenderReply>();
-    default: return nullptr;
-  }
-}
-
 /// Collects every ImageInfo in `m` (any depth) by blob index, for labelling blobs.
 void CollectImageInfos(const gpb::Message& m, std::vector<const pb::ImageInfo*>* by_blob) {
   if (m.GetDescriptor() == pb::ImageInfo::descriptor()) {
@@ -731,7 +715,7 @@ std::string DebugString(const WireMessage& wire) {
       if (!ValidateAny(wire, header.type(), &why)) out << "INVALID: " << why.text << "\n";
     }
     std::vector<const pb::ImageInfo*> infos(wire.blobs.size(), nullptr);
-    std::unique_ptr<gpb::Message> meta = NewMeta(header.type());
+    std::unique_ptr<gpb::Message> meta = NewMessage(header.type());
     bool parsed = false;
     if (meta) {
       gpb::LogSilencer silence;
@@ -757,6 +741,22 @@ std::string DebugString(const WireMessage& wire) {
     out << "INVALID: internal: " << e.what() << "\n";
   }
   return out.str();
+}
+
+std::unique_ptr<google::protobuf::Message> NewMessage(pb::MsgType type) {
+  switch (type) {
+    case pb::POSE: return std::make_unique<pb::PoseStamped>();
+    case pb::CAMERA_INFO: return std::make_unique<pb::CameraInfo>();
+    case pb::RGBD_FRAME: return std::make_unique<pb::RgbdFrame>();
+    case pb::POSE_REQUEST: return std::make_unique<pb::PoseRequest>();
+    case pb::VIEW: return std::make_unique<pb::View>();
+    case pb::MODEL_VERSION: return std::make_unique<pb::ModelVersion>();
+    case pb::TRAINER_STATUS: return std::make_unique<pb::TrainerStatus>();
+    case pb::NODE_STATUS: return std::make_unique<pb::NodeStatus>();
+    case pb::RENDER_REQUEST: return std::make_unique<pb::RenderRequest>();
+    case pb::RENDER_REPLY: return std::make_unique<pb::RenderReply>();
+    default: return nullptr;
+  }
 }
 
 }  // namespace p2i::msgs

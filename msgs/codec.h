@@ -9,6 +9,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <string>
 
 #include "msgs/decode_stats.h"
@@ -146,6 +147,10 @@ bool PeekHeader(const std::string& header_frame, pb::Header* out, std::string* e
 /// text, each blob as "<blob N: W x H ENC, B bytes>", and "INVALID: <reason>" if the message
 /// would be rejected. Never throws on bad input; does not count in DecodeStats.
 std::string DebugString(const WireMessage& wire);
+
+/// An empty protobuf message of the top-level type `type` (the header frame's schema), or null
+/// for an unknown type. For generic tools (DebugString, fuzzers) that handle any message.
+std::unique_ptr<google::protobuf::Message> NewMessage(pb::MsgType type);
 
 /// Validation of a pose on its own (also used by the decoders): finite position, orientation
 /// present with norm within kQuaternionTolerance of 1; normalises the orientation. `field`

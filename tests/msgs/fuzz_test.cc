@@ -58,22 +58,6 @@ std::vector<Decoder> AllDecoders() {
           MakeDecoder<RenderReplyMsg>("RenderReplyMsg")};
 }
 
-std::unique_ptr<gpb::Message> NewMeta(pb::MsgType type) {
-  switch (type) {
-    case pb::POSE: return std::make_unique<pb::PoseStamped>();
-    case pb::CAMERA_INFO: return std::make_unique<pb::CameraInfo>();
-    case pb::RGBD_FRAME: return std::make_unique<pb::RgbdFrame>();
-    case pb::POSE_REQUEST: return std::make_unique<pb::PoseRequest>();
-    case pb::VIEW: return std::make_unique<pb::View>();
-    case pb::MODEL_VERSION: return std::make_unique<pb::ModelVersion>();
-    case pb::TRAINER_STATUS: return std::make_unique<pb::TrainerStatus>();
-    case pb::NODE_STATUS: return std::make_unique<pb::NodeStatus>();
-    case pb::RENDER_REQUEST: return std::make_unique<pb::RenderRequest>();
-    case pb::RENDER_REPLY: return std::make_unique<pb::RenderReply>();
-    default: return nullptr;
-  }
-}
-
 /// A valid message of a random type.
 WireMessage RandomValid(testing::Samples& s) {
   const uint32_t w = s.Int(1, 24);
@@ -184,7 +168,7 @@ Blob RandomBlob(testing::Samples& s, size_t max) {
 /// Applies `mutation` to `wire` (of type `type`). Returns false if it does not apply to this
 /// message (e.g. no quaternion in it); the caller then picks another.
 bool Mutate(Mutation mutation, pb::MsgType type, testing::Samples& s, WireMessage* wire) {
-  auto meta = NewMeta(type);
+  auto meta = NewMessage(type);
   REQUIRE(meta->ParseFromString(wire->header));
   auto reserialize = [&] {
     wire->header.clear();
