@@ -143,6 +143,8 @@ class Run {
   void CheckLoss(const torch::Tensor& loss, const char* what, int step);
   int PhaseOne(int target);
   int PhaseTwo(int target);
+  /// Between steps: true (after saving a checkpoint at the current step) when should_stop says so.
+  bool StopNow();
 
   P2iConfig config_;
   TrainerOptions options_;
@@ -155,6 +157,7 @@ class Run {
   double ema_ = -1.0;
   double last_val_psnr_ = 0.0;
   bool injected_ = false;
+  bool stopped_ = false;
   Clock::time_point phase_start_;
   int phase_start_step_ = 0;
   Clock::time_point last_progress_;
@@ -199,6 +202,16 @@ void Run::Rollback(const std::string& why) {
   if (options_.progress)
     std::fprintf(stderr, "\ndivergence (%s): rolled back to the last checkpoint, lr x%.3g\n",
                  why.c_str(), meta_.lr_scale);
+}
+
+bool Run::StopNow() {
+  if (stopped_) return true;
+  if (!options_.should_stop || !options_.should_stop()) return false;
+  Save();
+  stopped_ = true;
+  Log({{"event", "stopped"}, {"phase1_step", meta_.phase1_step}, {"phase2_step", meta_.phase2_step}});
+  if (options_.progress) std::fprintf(stderr, "\nstopped: checkpoint saved\n");
+  return true;
 }
 
 void Run::Log(const json& line) {
@@ -266,6 +279,7 @@ int Run::PhaseOne(int target) {
   phase_start_step_ = meta_.phase1_step;
   const char* name = config_.IsBaseline() ? "cnn" : "phase1";
   while (meta_.phase1_step < target) {
+    if (StopNow()) break;
     const int step = meta_.phase1_step;
     const auto idx = BatchIndices(1, step, n);
     const auto real = train_.images.index_select(0, idx);
@@ -351,6 +365,7 @@ int Run::PhaseTwo(int target) {
   phase_start_step_ = meta_.phase2_step;
   ema_ = -1.0;
   while (meta_.phase2_step < target) {
+    if (StopNow()) break;
     const int step = meta_.phase2_step;
     const auto idx = BatchIndices(2, step, n);
     const auto real = train_.images.index_select(0, idx);
@@ -506,7 +521,7 @@ TrainReport Run::Go(const scene::RgbdDataset& train, const scene::RgbdDataset& v
   const bool run1 = options_.phase != 2;
   const bool run2 = options_.phase != 1 && !config_.IsBaseline() && config_.enet;
   if (run1) PhaseOne(options_.steps >= 0 ? options_.steps : config_.steps_phase1);
-  if (run2) PhaseTwo(options_.steps >= 0 ? options_.steps : config_.steps_phase2);
+  if (run2 && !stopped_) PhaseTwo(options_.steps >= 0 ? options_.steps : config_.steps_phase2);
   Save();
   Log({{"event", "end"},
        {"phase1_step", meta_.phase1_step},
@@ -516,6 +531,7 @@ TrainReport Run::Go(const scene::RgbdDataset& train, const scene::RgbdDataset& v
   report.phase1_steps = meta_.phase1_step;
   report.phase2_steps = meta_.phase2_step;
   report.rollbacks = meta_.rollbacks;
+  report.stopped = stopped_;
   report.val_psnr = last_val_psnr_;
   report.checkpoint_path = checkpoint_path_;
   report.log_path = options_.out_dir + "/train_log.jsonl";

@@ -5,6 +5,7 @@
 /// `p2i train` tool use it).
 #pragma once
 
+#include <functional>
 #include <memory>
 #include <string>
 
@@ -25,6 +26,7 @@ struct TrainerOptions {
   int max_rollbacks = 5;    ///< divergence-guard rollbacks before giving up
   /// Fault injection for tests: poison the phase-1 loss with NaN once at this step (-1 = never).
   int inject_nan_at_step = -1;
+  std::function<bool()> should_stop;  ///< polled between steps; true = save a checkpoint now and return
 
   void Validate() const;
 };
@@ -34,6 +36,7 @@ struct TrainReport {
   int phase1_steps = 0;
   int phase2_steps = 0;
   int rollbacks = 0;
+  bool stopped = false;               ///< should_stop() ended the run early (checkpoint saved)
   double val_psnr = 0.0;              ///< last validation PSNR (dB, RGB), 0 if none
   double mean_image_val_psnr = 0.0;   ///< PSNR of predicting the mean training image
   std::string checkpoint_path;

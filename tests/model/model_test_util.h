@@ -1,6 +1,6 @@
 /// @file model_test_util.h
-/// @brief Helpers shared by the model tests: temp dirs, a tiny config, quiet trainer options,
-/// and exact comparison of module weights.
+/// @brief Helpers shared by the model tests: Catch's CHECK restored after LibTorch's glog, temp
+/// dirs, a tiny config, quiet trainer options, and exact comparison of module weights.
 #pragma once
 
 #include <unistd.h>
@@ -8,7 +8,15 @@
 #include <filesystem>
 #include <string>
 
+#include <catch2/catch.hpp>
 #include <torch/torch.h>
+
+// LibTorch pulls in glog, whose CHECK(cond) replaces Catch's: a failing CHECK would abort the
+// whole test binary, and passing ones are not counted. Every torch test includes this header
+// after torch, so Catch's CHECK is restored here.
+#undef CHECK
+#define CHECK(...) \
+  INTERNAL_CATCH_TEST("CHECK", Catch::ResultDisposition::ContinueOnFailure, __VA_ARGS__)
 
 #include "model/p2i_config.h"
 #include "model/trainer.h"

@@ -6,6 +6,7 @@
 
 #include "model/losses.h"
 #include "model/networks.h"
+#include "tests/model/model_test_util.h"
 
 using namespace p2i::model;
 

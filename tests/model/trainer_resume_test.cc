@@ -73,3 +73,42 @@ TEST_CASE("the CNN baseline trains by the same Trainer and resumes exactly", "[u
   fs::remove_all(dir_a);
   fs::remove_all(dir_b);
 }
+
+TEST_CASE("the stop hook saves at the current step and --resume continues exactly", "[unit]") {
+  const auto data = MakeProceduralDataset(12, 32);
+  const auto c = TinyConfig("p2i_net");
+  const auto dir_a = TempDir("stop_a"), dir_b = TempDir("stop_b");
+  // Unbroken: 5 phase-1 steps then 5 phase-2 steps.
+  Trainer(c, Quiet(dir_a, 5, 0)).Run(data, data);
+  // Stopped by the hook after 2 steps (not a checkpoint_every multiple), before phase 2.
+  auto stop = Quiet(dir_b, 5, 0);
+  int polls = 0;
+  stop.should_stop = [&polls] { return ++polls > 2; };
+  const auto stopped = Trainer(c, stop).Run(data, data);
+  CHECK(stopped.stopped);
+  CHECK(stopped.phase1_steps == 2);
+  CHECK(stopped.phase2_steps == 0);
+  CHECK(ReadCheckpointMeta(Trainer::CheckpointPath(dir_b)).phase1_step == 2);
+  const auto resumed = Trainer(c, Quiet(dir_b, 5, 0, /*resume=*/true)).Run(data, data);
+  CHECK_FALSE(resumed.stopped);
+  CHECK(resumed.phase1_steps == 5);
+  CHECK(resumed.phase2_steps == 5);
+  Networks a(c), b(c);
+  LoadCheckpoint(Trainer::CheckpointPath(dir_a), a, {}, false);
+  LoadCheckpoint(Trainer::CheckpointPath(dir_b), b, {}, false);
+  CHECK(SameParameters(*a.g, *b.g));
+  CHECK(SameParameters(*a.d, *b.d));
+  REQUIRE(a.e);
+  CHECK(SameParameters(*a.e, *b.e));
+  // A hook that never fires changes nothing.
+  const auto dir_c = TempDir("stop_c");
+  auto never = Quiet(dir_c, 5, 0);
+  never.should_stop = [] { return false; };
+  CHECK_FALSE(Trainer(c, never).Run(data, data).stopped);
+  Networks n(c);
+  LoadCheckpoint(Trainer::CheckpointPath(dir_c), n, {}, false);
+  CHECK(SameParameters(*a.g, *n.g));
+  fs::remove_all(dir_a);
+  fs::remove_all(dir_b);
+  fs::remove_all(dir_c);
+}
