@@ -1,5 +1,5 @@
 /// @file camera_node.cc
-/// @brief Camera node backends: sim and replay.
+/// @brief Camera node backends: sim, replay and the live ones (aravis, libcamera).
 #include "nodes/camera/camera_node.h"
 
 #include <filesystem>
@@ -19,15 +19,18 @@ std::chrono::nanoseconds Period(double rate_hz) {
 }  // namespace
 
 CameraNode::CameraNode(const runtime::NodeArgs& args) : Node("camera", args) {
-  const std::string backend = Declare<std::string>("backend", "sim", "sim | replay");
+  const std::string backend =
+      Declare<std::string>("backend", "sim", "sim | replay | aravis | libcamera");
   frame_id_ = Declare<std::string>("frame_id", "camera", "frame of the images");
   if (backend == "sim") {
     SetUpSim();
   } else if (backend == "replay") {
     SetUpReplay();
+  } else if (backend == "aravis" || backend == "libcamera") {
+    SetUpLive(backend);
   } else {
     throw runtime::StartupError("backend '" + backend +
-                                "' is not available (this build has: sim, replay)");
+                                "' is not known (sim, replay, aravis, libcamera)");
   }
   msgs::pb::CameraInfo info;
   info.mutable_header()->set_frame_id(frame_id_);
@@ -38,6 +41,14 @@ CameraNode::CameraNode(const runtime::NodeArgs& args) : Node("camera", args) {
   info_pub_ = Advertise<msgs::pb::CameraInfo>("camera_info", latched);
   info_pub_->Publish(info);
   rgbd_pub_ = Advertise<msgs::RgbdFrame>("rgbd");
+  if (live_) {
+    // Streaming starts last: every publisher exists before the first frame arrives.
+    live_->Start([this](LiveFrame&& f) { OnLiveFrame(std::move(f)); },
+                 [this](const std::string& error) {
+                   // Thrown on the executor thread: Spin() ends and the node exits with 1.
+                   GetExecutor().Post([error] { throw std::runtime_error(error); });
+                 });
+  }
 }
 
 void CameraNode::SetUpSim() {
@@ -196,15 +207,187 @@ void CameraNode::OnReplayTick() {
 }
 
 void CameraNode::PublishSample(const scene::RgbdSample& sample, int64_t capture_stamp_ns) {
+  Publish(sample.rgb, sample.depth, &sample.pose, capture_stamp_ns);
+}
+
+void CameraNode::Publish(const cv::Mat& rgb, const cv::Mat& depth, const scene::Pose* pose,
+                         int64_t capture_stamp_ns) {
   msgs::RgbdFrame frame;
   frame.meta.mutable_header()->set_capture_stamp_ns(capture_stamp_ns);
   frame.meta.mutable_header()->set_frame_id(frame_id_);
   ToMsg(camera_, frame.meta.mutable_camera_info());
-  ToMsg(sample.pose, frame.meta.mutable_pose());
-  frame.rgb = ToImage(sample.rgb);
-  frame.depth = ToImage(sample.depth);
+  if (pose != nullptr) ToMsg(*pose, frame.meta.mutable_pose());
+  frame.rgb = ToImage(rgb);
+  frame.depth = ToImage(depth);
   rgbd_pub_->Publish(frame);
   Count("frames_published");
+}
+
+// ---------------------------------------------------------------------------------------------
+// live backends
+
+void CameraNode::SetUpLive(const std::string& backend) {
+  const std::string camera_file = Declare<std::string>(
+      "camera_info_file", "", "ROS camera_info YAML (calib/); empty = a nominal pinhole");
+  const int width = Declare<int>("width", 0, "image width (0 = the device's)");
+  const int height = Declare<int>("height", 0, "image height (0 = the device's)");
+  const std::string pose_mode = Declare<std::string>(
+      "pose_mode", "topic", "topic (pose from 'pose' by capture stamp) | none (no pose)");
+  const double tolerance = Declare<double>(
+      "pose_tolerance", 0.05, "s: both poses bracketing a frame's stamp must be this close");
+  const double wait = Declare<double>("pose_wait", 0.2, "s: a frame may wait for a newer pose");
+  const int max_pending = Declare<int>("max_pending", 8, "frames waiting for a pose at most");
+  const double stamp_offset =
+      Declare<double>("stamp_offset", 0.0, "s subtracted from the host reception stamp");
+  const int buffers = Declare<int>("buffers", backend == "aravis" ? 8 : 4, "stream buffers");
+  if (width < 0 || height < 0) throw runtime::StartupError("width and height must be >= 0");
+  if (pose_mode != "topic" && pose_mode != "none") {
+    throw runtime::StartupError("pose_mode '" + pose_mode + "' must be topic or none");
+  }
+  if (!(tolerance >= 0.0) || !(wait >= 0.0) || max_pending < 1) {
+    throw runtime::StartupError("pose_tolerance and pose_wait must be >= 0, max_pending >= 1");
+  }
+  stamp_offset_ns_ = static_cast<int64_t>(stamp_offset * 1e9);
+  try {
+    if (backend == "aravis") {
+      AravisOptions o;
+      o.device = Declare<std::string>("device", "", "Aravis device id or IP; empty = the first");
+      o.pixel_format = Declare<std::string>(
+          "pixel_format", "", "Mono8 | Mono16 | RGB8 | BGR8 | Bayer{RG,GR,GB,BG}8; empty = keep");
+      o.width = width;
+      o.height = height;
+      o.frame_rate = Declare<double>("frame_rate", 0.0, "Hz; 0 = the device's");
+      o.exposure_us = Declare<double>("exposure_us", 0.0, "us; 0 = the device's");
+      o.depth_device =
+          Declare<std::string>("depth_device", "", "second device streaming Mono16 depth");
+      o.depth_scale = Declare<double>("depth_scale", 0.001, "metres per depth unit");
+      o.depth_tolerance = Declare<double>(
+          "depth_tolerance", 0.02, "s: max stamp difference between colour and depth");
+      o.buffers = buffers;
+      live_ = OpenAravisBackend(o);
+    } else {
+      LibcameraOptions o;
+      o.camera = Declare<std::string>("camera", "", "libcamera camera id; empty = the first");
+      o.width = width;
+      o.height = height;
+      o.buffers = buffers;
+      live_ = OpenLibcameraBackend(o);
+    }
+  } catch (const runtime::StartupError&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw runtime::StartupError(e.what());
+  }
+  const int w = live_->width(), h = live_->height();
+  if (!camera_file.empty()) {
+    try {
+      camera_ = scene::CameraInfo::FromYamlFile(camera_file);
+    } catch (const std::exception& e) {
+      throw runtime::StartupError(e.what());
+    }
+    if (camera_.image_width != w || camera_.image_height != h) {
+      if (static_cast<int64_t>(camera_.image_width) * h !=
+          static_cast<int64_t>(camera_.image_height) * w) {
+        throw runtime::StartupError(
+            "camera_info_file '" + camera_file + "' is for " +
+            std::to_string(camera_.image_width) + "x" + std::to_string(camera_.image_height) +
+            " but the device streams " + std::to_string(w) + "x" + std::to_string(h) +
+            " (another aspect ratio): calibrate at this size or set width/height");
+      }
+      camera_ = camera_.Scaled(w, h);
+    }
+  } else {
+    camera_ = scene::SimScene::DefaultCamera(w, h);
+    Log().warn("no camera_info_file: publishing a nominal pinhole (f = 525 W / 640) for {}x{}", w,
+               h);
+  }
+  if (pose_mode == "topic") {
+    FramePoseMatcher::Options mo;
+    mo.tolerance_ns = static_cast<int64_t>(tolerance * 1e9);
+    mo.max_wait_ns = static_cast<int64_t>(wait * 1e9);
+    mo.max_pending = static_cast<size_t>(max_pending);
+    matcher_.emplace(mo);
+    pose_sub_ = Subscribe<msgs::pb::PoseStamped>("pose", [this](const msgs::pb::PoseStamped& m) {
+      matcher_->AddPose(m.header().capture_stamp_ns(), FromMsg(m.pose()));
+      PublishMatched();
+    });
+  }
+  Log().info("{} backend: {}; poses {}", backend, live_->Describe(),
+             pose_mode == "topic" ? "from " + Resolve("pose") + " within " +
+                                        std::to_string(tolerance) + " s"
+                                  : "none");
+  // Frames waiting for a pose time out even when no pose and no frame arrives.
+  AddTimer(std::chrono::milliseconds(20), [this] { PublishMatched(); });
+}
+
+void CameraNode::OnLiveFrame(LiveFrame&& frame) {
+  std::lock_guard<std::mutex> lock(handoff_mutex_);
+  // Bounded: when the executor falls behind, the oldest frames go (counted).
+  while (handoff_.size() >= 4) {
+    handoff_.pop_front();
+    Count("frames_dropped_backlog");
+  }
+  handoff_.push_back(std::move(frame));
+  if (!drain_posted_) {
+    drain_posted_ = true;
+    GetExecutor().Post([this] { DrainLiveFrames(); });
+  }
+}
+
+void CameraNode::DrainLiveFrames() {
+  std::deque<LiveFrame> frames;
+  {
+    std::lock_guard<std::mutex> lock(handoff_mutex_);
+    frames.swap(handoff_);
+    drain_posted_ = false;
+  }
+  for (LiveFrame& f : frames) {
+    f.stamp_ns -= stamp_offset_ns_;
+    if (f.depth.empty()) f.depth = cv::Mat::zeros(f.rgb.size(), CV_32FC1);  // all invalid
+    if (matcher_) {
+      matcher_->AddFrame(std::move(f), runtime::NowNs());
+    } else {
+      Publish(f.rgb, f.depth, nullptr, f.stamp_ns);
+    }
+  }
+  if (matcher_) PublishMatched();
+  SyncLiveCounters();
+}
+
+void CameraNode::PublishMatched() {
+  if (!matcher_) return;
+  for (const MatchedFrame& m : matcher_->Poll(runtime::NowNs())) {
+    Publish(m.frame.rgb, m.frame.depth, &m.pose, m.frame.stamp_ns);
+  }
+  SyncLiveCounters();
+}
+
+void CameraNode::SyncLiveCounters() {
+  const auto add = [this](const char* key, uint64_t now, uint64_t* before) {
+    if (now > *before) Count(key, now - *before);
+    *before = now;
+  };
+  if (matcher_) {
+    const FramePoseMatcher::Counters& c = matcher_->counters();
+    uint64_t dropped_before = reported_.dropped();
+    if (c.dropped() > dropped_before) Count("frames_dropped_no_pose", c.dropped() - dropped_before);
+    add("frames_dropped_pose_too_old", c.dropped_too_old, &reported_.dropped_too_old);
+    add("frames_dropped_pose_gap", c.dropped_gap, &reported_.dropped_gap);
+    add("frames_dropped_pose_timeout", c.dropped_timeout, &reported_.dropped_timeout);
+    add("frames_dropped_pose_overflow", c.dropped_overflow, &reported_.dropped_overflow);
+    add("poses_duplicate", c.poses_duplicate, &reported_.poses_duplicate);
+    add("poses_too_old", c.poses_too_old, &reported_.poses_too_old);
+  }
+  if (live_) {
+    const LiveBackend::Stats s = live_->GetStats();
+    add("frames_captured", s.frames, &reported_stats_.frames);
+    add("frames_incomplete", s.incomplete, &reported_stats_.incomplete);
+    add("frames_without_depth", s.depth_unmatched, &reported_stats_.depth_unmatched);
+  }
+}
+
+void CameraNode::OnShutdown() {
+  if (live_) live_->Stop();
 }
 
 }  // namespace p2i::nodes

@@ -1,14 +1,19 @@
 /// @file camera_node.h
 /// @brief The camera node: RGB-D frames with intrinsics and poses from a backend chosen by
-/// parameter: `sim` (the synthetic scene) or `replay` (a dataset folder).
+/// parameter: `sim` (the synthetic scene), `replay` (a dataset folder), or a live device:
+/// `aravis` (GigE Vision / USB3 Vision) or `libcamera`.
 #pragma once
 
 #include <chrono>
+#include <deque>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "nodes/camera/frame_pose_matcher.h"
+#include "nodes/camera/live_backend.h"
 #include "nodes/runtime/node.h"
 #include "scene/dataset_index.h"
 #include "scene/pose.h"
@@ -17,7 +22,7 @@
 namespace p2i::nodes {
 
 /// Parameters (README.md beside this file has the full list):
-///   backend: "sim" | "replay";
+///   backend: "sim" | "replay" | "aravis" | "libcamera";
 ///   rate (Hz): sim frames per second (20); replay: 0 = the recorded rate;
 ///   width, height (0 = native): sim render size; replay centre-crop + resize;
 ///   camera_info_file: ROS camera_info YAML (sim; replay: override);
@@ -25,11 +30,22 @@ namespace p2i::nodes {
 ///     render at the newest pose received on "pose", at most `rate` per second; "trajectory":
 ///     its own trajectory spec), trajectory, trajectory_index, loop;
 ///   replay: dataset (folder), format, invalid_depth (7-Scenes raw value), rate_scale (1.0),
-///     loop (false), exit_at_end (false).
+///     loop (false), exit_at_end (false);
+///   live (aravis, libcamera): camera_info_file (scaled to the stream size if the aspect
+///     matches), pose_mode ("topic": each frame gets the pose interpolated at its capture stamp
+///     from "pose", frames without one are dropped; "none": frames carry no pose),
+///     pose_tolerance (s, 0.05), pose_wait (s, 0.2), max_pending (8), stamp_offset (s, 0:
+///     subtracted from the host reception stamp);
+///   aravis: device, pixel_format, width, height, frame_rate, exposure_us, depth_device,
+///     depth_scale, depth_tolerance, buffers; libcamera: camera, width, height, buffers.
 /// Topics: publishes "rgbd" (RgbdFrame with the full camera_info and the pose) and
-/// "camera_info" (CameraInfo, latched); sim in topic mode subscribes "pose" (PoseStamped).
-/// Counters: frames_published, frames_skipped (replay fell behind), laps.
-/// Thread-safety: everything runs on the node's executor thread.
+/// "camera_info" (CameraInfo, latched); sim in topic mode and live backends subscribe "pose"
+/// (PoseStamped).
+/// Counters: frames_published, frames_skipped (replay fell behind), laps; live: frames_captured,
+/// frames_dropped_no_pose (sum of frames_dropped_pose_{too_old,gap,timeout,overflow}),
+/// frames_dropped_backlog, frames_incomplete, frames_without_depth.
+/// Thread-safety: everything runs on the node's executor thread, except a live backend's worker
+/// thread, which hands frames over through a mutex-guarded queue and Executor::Post.
 class CameraNode : public runtime::Node {
  public:
   explicit CameraNode(const runtime::NodeArgs& args);
@@ -37,9 +53,17 @@ class CameraNode : public runtime::Node {
  private:
   void SetUpSim();
   void SetUpReplay();
+  void SetUpLive(const std::string& backend);
+  void OnShutdown() override;
   void PublishSample(const scene::RgbdSample& sample, int64_t capture_stamp_ns);
+  void Publish(const cv::Mat& rgb, const cv::Mat& depth, const scene::Pose* pose,
+               int64_t capture_stamp_ns);
   void OnSimTick();
   void OnReplayTick();
+  void OnLiveFrame(LiveFrame&& frame);  ///< worker thread
+  void DrainLiveFrames();               ///< executor thread
+  void PublishMatched();
+  void SyncLiveCounters();
 
   std::string frame_id_;
   scene::CameraInfo camera_;
@@ -64,6 +88,16 @@ class CameraNode : public runtime::Node {
   size_t next_frame_ = 0;
   std::chrono::steady_clock::time_point lap_start_;
   bool finished_ = false;
+
+  // live (aravis, libcamera)
+  std::unique_ptr<LiveBackend> live_;
+  std::optional<FramePoseMatcher> matcher_;  ///< empty with pose_mode none
+  int64_t stamp_offset_ns_ = 0;
+  std::mutex handoff_mutex_;
+  std::deque<LiveFrame> handoff_;  ///< from the worker, guarded by handoff_mutex_
+  bool drain_posted_ = false;      ///< guarded by handoff_mutex_
+  FramePoseMatcher::Counters reported_;
+  LiveBackend::Stats reported_stats_;
 };
 
 }  // namespace p2i::nodes
