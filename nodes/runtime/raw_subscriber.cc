@@ -75,16 +75,16 @@ bool RawSubscriber::ReadOne(msgs::WireMessage* m, msgs::pb::Header* header, bool
   const uint64_t seq = header->seq();
   auto it = last_seq_.find(header->publisher());
   if (it != last_seq_.end()) {
-    if (seq == it->second) {
+    if (seq == it->second.first && header->publish_stamp_ns() == it->second.second) {
       stats_.duplicates.fetch_add(1, std::memory_order_relaxed);
       return true;
     }
-    if (seq > it->second + 1) {
-      stats_.dropped.fetch_add(seq - it->second - 1, std::memory_order_relaxed);
+    if (seq > it->second.first + 1) {
+      stats_.dropped.fetch_add(seq - it->second.first - 1, std::memory_order_relaxed);
     }
     // seq < last: the publisher restarted; tracking restarts from here.
   }
-  last_seq_[header->publisher()] = seq;
+  last_seq_[header->publisher()] = {seq, header->publish_stamp_ns()};
   *ok = true;
   return true;
 }

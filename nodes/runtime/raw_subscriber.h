@@ -7,6 +7,7 @@
 #include <functional>
 #include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <zmq.hpp>
@@ -80,7 +81,9 @@ class RawSubscriber {
   SubscriberOptions options_;
   std::vector<std::string> endpoints_;
   zmq::socket_t socket_;
-  std::map<std::string, uint64_t> last_seq_;  // per publisher
+  // per publisher: last seq and its publish stamp (a latched re-send repeats both; a respawned
+  // publisher whose first delivered message repeats the old last seq has a newer stamp)
+  std::map<std::string, std::pair<uint64_t, int64_t>> last_seq_;
   std::vector<zmq::message_t> frames_;
   std::string last_error_;
   TransportStats stats_;

@@ -74,6 +74,7 @@ SinkFrame FrameFromView(const msgs::View& view, const std::string& topic) {
   frame.synthetic = true;
   frame.source = SourceOf(h, topic);
   frame.seq = h.seq();
+  frame.publish_stamp_ns = h.publish_stamp_ns();
   frame.coverage = view.meta.coverage();
   frame.method = view.meta.method();
   frame.model_version = static_cast<int64_t>(view.meta.model_version());
@@ -91,6 +92,7 @@ SinkFrame FrameFromRgbd(const msgs::RgbdFrame& msg, const std::string& topic) {
   frame.synthetic = false;
   frame.source = SourceOf(h, topic);
   frame.seq = h.seq();
+  frame.publish_stamp_ns = h.publish_stamp_ns();
   return frame;
 }
 

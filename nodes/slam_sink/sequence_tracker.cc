@@ -2,6 +2,7 @@
 /// @brief SequenceTracker.
 #include "nodes/slam_sink/sequence_tracker.h"
 
+#include <algorithm>
 #include <numeric>
 
 namespace p2i::slam_sink {
@@ -28,7 +29,7 @@ std::string SequenceTracker::CurrentKey(const std::string& source) const {
 }
 
 SequenceTracker::Outcome SequenceTracker::Observe(const std::string& source, uint64_t seq,
-                                                  uint64_t* gap) {
+                                                  uint64_t* gap, int64_t publish_stamp_ns) {
   if (gap != nullptr) *gap = 0;
   std::string key = CurrentKey(source);
   auto it = accounts_.find(key);
@@ -37,8 +38,12 @@ SequenceTracker::Outcome SequenceTracker::Observe(const std::string& source, uin
     SourceAccount& account = it->second;
     // A restarted publisher counts from 0 (or 1) again: a new epoch, not a flood of "late".
     const bool seen_before = seq < account.first_seq || seen_[key].count(seq) > 0;
-    if (seen_before && seq <= restart_threshold_ &&
-        account.last_seq > seq + restart_threshold_) {
+    const auto newest = newest_stamp_.find(key);
+    const bool newer_stamp = publish_stamp_ns > 0 && newest != newest_stamp_.end() &&
+                             newest->second > 0 && publish_stamp_ns > newest->second;
+    if ((seen_before && seq <= restart_threshold_ &&
+         account.last_seq > seq + restart_threshold_) ||
+        (newer_stamp && seq <= account.last_seq)) {
       ++epochs_[source];
       key = CurrentKey(source);
       it = accounts_.end();
@@ -51,10 +56,13 @@ SequenceTracker::Outcome SequenceTracker::Observe(const std::string& source, uin
     account.received = 1;
     accounts_[key] = account;
     seen_[key].insert(seq);
+    newest_stamp_[key] = publish_stamp_ns;
     return restart_outcome;
   }
   SourceAccount& account = it->second;
   std::set<uint64_t>& seen = seen_[key];
+  int64_t& newest_stamp = newest_stamp_[key];
+  newest_stamp = std::max(newest_stamp, publish_stamp_ns);
   if (seq < account.first_seq) {
     ++account.before_first;
     return Outcome::kBeforeFirst;

@@ -30,7 +30,12 @@ struct SourceAccount {
 /// its number from the missing set. A publisher restart (a seq <= `restart_threshold` that was
 /// already received or lies before the window, while the highest seen is more than
 /// `restart_threshold` above it) starts a new epoch: the source is then tracked as
-/// "<source>#<epoch>" so the old epoch's accounting is kept.
+/// "<source>#<epoch>" so the old epoch's accounting is kept. When publish stamps are given, a
+/// seq at or below the highest one seen whose publish stamp is newer than every stamp of the
+/// epoch is a restart too, whatever its number: one publisher sends in order, so only a new
+/// process can send a lower number later (a respawned node whose first messages were lost to
+/// the subscriber's reconnect would otherwise look like a run of duplicates and be discarded).
+/// A latched re-publication carries its original stamp and stays a duplicate.
 ///
 /// Thread-compatible.
 class SequenceTracker {
@@ -41,7 +46,9 @@ class SequenceTracker {
   explicit SequenceTracker(uint64_t restart_threshold = 2);
 
   /// Records (source, seq); `gap` (optional) receives how many numbers were skipped just now.
-  Outcome Observe(const std::string& source, uint64_t seq, uint64_t* gap = nullptr);
+  /// `publish_stamp_ns` (0 = unknown) is the header's publish stamp (restart detection).
+  Outcome Observe(const std::string& source, uint64_t seq, uint64_t* gap = nullptr,
+                  int64_t publish_stamp_ns = 0);
 
   /// Accounts keyed by source name ("<source>#<epoch>" for epochs after a restart).
   const std::map<std::string, SourceAccount>& accounts() const { return accounts_; }
@@ -58,6 +65,7 @@ class SequenceTracker {
   std::map<std::string, SourceAccount> accounts_;
   std::map<std::string, int> epochs_;                  // source -> current epoch
   std::map<std::string, std::set<uint64_t>> seen_;    // current key -> received seq numbers
+  std::map<std::string, int64_t> newest_stamp_;        // current key -> newest publish stamp
 };
 
 }  // namespace p2i::slam_sink

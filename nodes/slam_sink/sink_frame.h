@@ -23,6 +23,7 @@ struct SinkFrame {
   bool synthetic = true;        ///< false: a real camera frame
   std::string source;           ///< publisher / topic name, the key of sequence accounting
   uint64_t seq = 0;             ///< the publisher's message sequence number
+  int64_t publish_stamp_ns = 0; ///< when the publisher sent it (0 = unknown); tells restarts apart
   double coverage = std::numeric_limits<double>::quiet_NaN();  ///< NaN = not reported
   std::string method;           ///< synthesis method, for frames.txt (may be empty)
   int64_t model_version = -1;   ///< -1 = unknown

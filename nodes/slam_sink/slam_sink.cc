@@ -51,7 +51,7 @@ SlamSink::Outcome SlamSink::Process(const SinkFrame& frame) {
   if (closed_) throw std::logic_error("SlamSink::Process after Close");
   Outcome outcome;
   ++received_;
-  outcome.sequence = tracker_.Observe(frame.source, frame.seq, &outcome.gap);
+  outcome.sequence = tracker_.Observe(frame.source, frame.seq, &outcome.gap, frame.publish_stamp_ns);
   if (outcome.sequence == SequenceTracker::Outcome::kDuplicate) {
     ++duplicates_;
     outcome.duplicate = true;

@@ -61,5 +61,33 @@ TEST_CASE("SequenceTracker keeps sources apart and treats a publisher restart as
   CHECK(tracker.TotalReceived() == 8 + 3 + 2);
 }
 
+TEST_CASE("SequenceTracker detects a restart by its newer publish stamp even when the first "
+          "messages after it were lost", "[unit]") {
+  SequenceTracker tracker;
+  int64_t t = 1000;
+  for (uint64_t s = 1; s <= 10; ++s) tracker.Observe("/synth", s, nullptr, t += 10);
+  // A latched re-publication: same seq, its original stamp -> duplicate.
+  CHECK(tracker.Observe("/synth", 10, nullptr, t) == Outcome::kDuplicate);
+  // An old message arriving late keeps its old stamp -> duplicate, not a restart.
+  CHECK(tracker.Observe("/synth", 4, nullptr, 1040) == Outcome::kDuplicate);
+  // The publisher respawns; its seq 1..3 never reached us (reconnect): 4 is the first we see.
+  uint64_t gap = 99;
+  CHECK(tracker.Observe("/synth", 4, &gap, t += 1000) == Outcome::kRestart);
+  CHECK(tracker.Observe("/synth", 5, &gap, t += 10) == Outcome::kInOrder);
+  CHECK(tracker.Observe("/synth", 7, &gap, t += 10) == Outcome::kAfterGap);
+  CHECK(gap == 1);
+  const auto& accounts = tracker.accounts();
+  REQUIRE(accounts.count("/synth#1") == 1);
+  CHECK(accounts.at("/synth").received == 10);
+  CHECK(accounts.at("/synth").duplicates == 2);
+  CHECK(accounts.at("/synth#1").first_seq == 4);
+  CHECK(accounts.at("/synth#1").received == 3);
+  CHECK(accounts.at("/synth#1").missing == std::set<uint64_t>{6});
+  // Without stamps the same sequence would have been discarded as duplicates.
+  SequenceTracker no_stamps;
+  for (uint64_t s = 1; s <= 10; ++s) no_stamps.Observe("/synth", s);
+  CHECK(no_stamps.Observe("/synth", 4) == Outcome::kDuplicate);
+}
+
 }  // namespace
 }  // namespace p2i::slam_sink
