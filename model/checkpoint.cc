@@ -2,6 +2,8 @@
 /// @brief Checkpoint file IO (see checkpoint.h).
 #include "model/checkpoint.h"
 
+#include "model/trainer.h"
+
 #include <unistd.h>
 
 #include <cstdio>
@@ -85,6 +87,7 @@ std::string CheckpointMeta::ToJson() const {
   j["phase2_step"] = phase2_step;
   j["lr_scale"] = lr_scale;
   j["rollbacks"] = rollbacks;
+  j["kind"] = inference_only ? "inference" : "full";
   return j.dump(2);
 }
 
@@ -102,16 +105,21 @@ CheckpointMeta CheckpointMeta::FromJson(const std::string& text, const std::stri
     m.phase2_step = j.at("phase2_step").get<int>();
     m.lr_scale = j.at("lr_scale").get<double>();
     m.rollbacks = j.at("rollbacks").get<int>();
+    const std::string kind = j.value("kind", std::string("full"));
+    if (kind != "full" && kind != "inference")
+      throw std::runtime_error("checkpoint " + source + ": unknown kind '" + kind +
+                               "' (expected full or inference)");
+    m.inference_only = kind == "inference";
   } catch (const json::exception& e) {
     throw std::runtime_error("checkpoint " + source + ": bad metadata: " + e.what());
   }
   return m;
 }
 
-Networks::Networks(const P2iConfig& config) {
+Networks::Networks(const P2iConfig& config, bool with_discriminator) {
   g = Generator(config);
   if (!config.IsBaseline()) {
-    d = Discriminator(config);
+    if (with_discriminator) d = Discriminator(config);
     if (config.enet) e = Enhancer(config);
   }
 }
@@ -138,13 +146,15 @@ void SaveCheckpoint(const std::string& path, const CheckpointMeta& meta, Network
   torch::serialize::OutputArchive archive;
   archive.write("meta", c10::IValue(meta.ToJson()));
   SaveModule(archive, "G", nets.g.ptr());
-  if (nets.d) SaveModule(archive, "D", nets.d.ptr());
   if (nets.e) SaveModule(archive, "ENET", nets.e.ptr());
-  SaveOptimizer(archive, "opt_G", optimizers.g);
-  SaveOptimizer(archive, "opt_D", optimizers.d);
-  SaveOptimizer(archive, "opt_ENET", optimizers.e);
-  auto gen = at::detail::getDefaultCPUGenerator();
-  archive.write("rng_state", gen.get_state());
+  if (!meta.inference_only) {
+    if (nets.d) SaveModule(archive, "D", nets.d.ptr());
+    SaveOptimizer(archive, "opt_G", optimizers.g);
+    SaveOptimizer(archive, "opt_D", optimizers.d);
+    SaveOptimizer(archive, "opt_ENET", optimizers.e);
+    auto gen = at::detail::getDefaultCPUGenerator();
+    archive.write("rng_state", gen.get_state());
+  }
   WriteFileAtomically(path, [&](const std::string& temp) {
     try {
       archive.save_to(temp);
@@ -179,6 +189,10 @@ CheckpointMeta ReadCheckpointMeta(const std::string& path) {
 CheckpointMeta LoadCheckpoint(const std::string& path, Networks& nets,
                               const Optimizers& optimizers, bool restore_rng) {
   CheckpointMeta meta = ReadCheckpointMeta(path);
+  if (meta.inference_only)
+    throw std::runtime_error("checkpoint " + path + " is an inference checkpoint (p2i export): it "
+                             "has no discriminator, optimiser or RNG state to resume from; use it "
+                             "for rendering or as a warm start (p2i train --init-from)");
   torch::serialize::InputArchive archive;
   try {
     archive.load_from(path);
@@ -199,6 +213,35 @@ CheckpointMeta LoadCheckpoint(const std::string& path, Networks& nets,
                              " (was it written for another config?)");
   }
   return meta;
+}
+
+CheckpointMeta LoadWeights(const std::string& path, Networks& nets, bool with_enet) {
+  CheckpointMeta meta = ReadCheckpointMeta(path);
+  torch::serialize::InputArchive archive;
+  try {
+    archive.load_from(path);
+    LoadModule(archive, "G", nets.g.ptr(), path);
+    if (nets.e && with_enet) LoadModule(archive, "ENET", nets.e.ptr(), path);
+  } catch (const c10::Error& e) {
+    throw std::runtime_error("cannot load checkpoint " + path + ": " + e.what_without_backtrace() +
+                             " (was it written for another config?)");
+  }
+  return meta;
+}
+
+ExportReport ExportInference(const std::string& in_checkpoint, const std::string& out_path) {
+  CheckpointMeta meta = ReadCheckpointMeta(in_checkpoint);
+  Networks nets(meta.config, /*with_discriminator=*/false);
+  LoadWeights(in_checkpoint, nets);
+  meta.inference_only = true;
+  SaveCheckpoint(out_path, meta, nets, {});
+  ExportReport r;
+  r.in_bytes = static_cast<int64_t>(std::filesystem::file_size(in_checkpoint));
+  r.out_bytes = static_cast<int64_t>(std::filesystem::file_size(out_path));
+  r.parameters = CountParameters(*nets.g) + (nets.e ? CountParameters(*nets.e) : 0);
+  r.phase1_steps = meta.phase1_step;
+  r.phase2_steps = meta.phase2_step;
+  return r;
 }
 
 }  // namespace p2i::model

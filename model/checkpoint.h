@@ -1,7 +1,8 @@
 /// @file checkpoint.h
 /// @brief Model checkpoints: one file holding the modules, the optimiser states, the CPU RNG
 /// state and a JSON metadata record (format version, config, pose normalisation, resolution,
-/// channels, steps, camera). Written atomically. INTERNAL to model/ (includes LibTorch).
+/// channels, steps, camera). Written atomically. An *inference* checkpoint (ExportInference in
+/// trainer.h) holds only the metadata, G and ENET. INTERNAL to model/ (includes LibTorch).
 #pragma once
 
 #include <functional>
@@ -30,6 +31,9 @@ struct CheckpointMeta {
   int phase2_step = 0;       ///< phase-2 (ENET) steps done
   double lr_scale = 1.0;     ///< divergence-guard learning-rate factor
   int rollbacks = 0;
+  /// An exported inference checkpoint: meta, G and ENET only (no D, optimisers or RNG state).
+  /// Stored as "kind": "inference" ("full" otherwise; files without the key are full).
+  bool inference_only = false;
 
   std::string ToJson() const;
   static CheckpointMeta FromJson(const std::string& json, const std::string& source);
@@ -37,7 +41,8 @@ struct CheckpointMeta {
 
 /// The networks of one model. d and e are null for the CNN baseline (e also when enet is off).
 struct Networks {
-  explicit Networks(const P2iConfig& config);
+  /// with_discriminator = false leaves d null (rendering needs only G and ENET).
+  explicit Networks(const P2iConfig& config, bool with_discriminator = true);
   Generator g{nullptr};
   Discriminator d{nullptr};
   Enhancer e{nullptr};
@@ -55,7 +60,8 @@ struct Optimizers {
 void WriteFileAtomically(const std::string& path,
                          const std::function<void(const std::string& temp_path)>& writer);
 
-/// Writes everything atomically. Throws std::runtime_error naming the path on failure.
+/// Writes everything atomically. Throws std::runtime_error naming the path on failure. With
+/// meta.inference_only only G and ENET are written (no D, optimisers or RNG state).
 void SaveCheckpoint(const std::string& path, const CheckpointMeta& meta, Networks& nets,
                     const Optimizers& optimizers);
 
@@ -64,8 +70,14 @@ void SaveCheckpoint(const std::string& path, const CheckpointMeta& meta, Network
 CheckpointMeta ReadCheckpointMeta(const std::string& path);
 
 /// Loads modules (and optimisers / RNG state when given / asked) into already-constructed
-/// networks built from the checkpoint's config. Returns the metadata.
+/// networks built from the checkpoint's config. Returns the metadata. Refuses an inference
+/// checkpoint (it has no D / optimiser state to resume from; use LoadWeights).
 CheckpointMeta LoadCheckpoint(const std::string& path, Networks& nets,
                               const Optimizers& optimizers, bool restore_rng);
+
+/// Loads only G and ENET (when `nets.e` is set and with_enet) from a full or an inference
+/// checkpoint into networks of the same shape; D, optimisers and the RNG are untouched.
+/// Returns the metadata.
+CheckpointMeta LoadWeights(const std::string& path, Networks& nets, bool with_enet = true);
 
 }  // namespace p2i::model

@@ -453,19 +453,36 @@ TrainReport Run::Go(const scene::RgbdDataset& train, const scene::RgbdDataset& v
     throw std::invalid_argument("phase 2 trains ENET, but config '" + config_.name +
                                 "' has none (cnn_baseline or enet: false)");
   P2iConfig schedule = config_;  // steps, logging cadence: from the given config
+  // Warm start: an inference checkpoint in out_dir (resume) or options_.init_from (no resume).
+  std::string warm_from;
+  CheckpointMeta source;
   if (load) {
-    const CheckpointMeta on_disk = ReadCheckpointMeta(checkpoint_path_);
-    if (on_disk.config.resolution != config_.resolution ||
-        on_disk.config.Channels() != config_.Channels() || on_disk.config.model != config_.model ||
-        on_disk.config.GeneratorWidths() != config_.GeneratorWidths())
-      throw std::runtime_error("checkpoint " + checkpoint_path_ + " was trained with config '" +
-                               on_disk.config.name + "' of another shape (resolution, channels, "
-                               "model or G widths differ from '" + config_.name + "')");
-    config_ = on_disk.config;
-    config_.steps_phase1 = schedule.steps_phase1;
-    config_.steps_phase2 = schedule.steps_phase2;
-    config_.val_every = schedule.val_every;
-    config_.checkpoint_every = schedule.checkpoint_every;
+    source = ReadCheckpointMeta(checkpoint_path_);
+    if (source.inference_only) warm_from = checkpoint_path_;
+  } else if (!options_.init_from.empty()) {
+    source = ReadCheckpointMeta(options_.init_from);
+    warm_from = options_.init_from;
+  }
+  if (load || !warm_from.empty()) {
+    const std::string path = load ? checkpoint_path_ : warm_from;
+    const P2iConfig& a = source.config;
+    if (a.resolution != config_.resolution || a.Channels() != config_.Channels() ||
+        a.model != config_.model || a.GeneratorWidths() != config_.GeneratorWidths() ||
+        a.g_fc_width != config_.g_fc_width)
+      throw std::runtime_error("checkpoint " + path + " was trained with config '" + a.name +
+                               "' of another shape (resolution, channels, model, G widths or "
+                               "g_fc_width differ from '" + config_.name + "')");
+    if (!warm_from.empty() && a.enet && config_.enet &&
+        (a.enet_width != config_.enet_width || a.enet_blocks != config_.enet_blocks))
+      throw std::runtime_error("checkpoint " + path + " has an ENET of another shape (enet_width, "
+                               "enet_blocks) than config '" + config_.name + "'");
+    if (load) {  // resume: the checkpoint's config, the given schedule
+      config_ = a;
+      config_.steps_phase1 = schedule.steps_phase1;
+      config_.steps_phase2 = schedule.steps_phase2;
+      config_.val_every = schedule.val_every;
+      config_.checkpoint_every = schedule.checkpoint_every;
+    }
   }
   torch::manual_seed(config_.seed);
   nets_ = std::make_unique<Networks>(config_);
@@ -477,7 +494,17 @@ TrainReport Run::Go(const scene::RgbdDataset& train, const scene::RgbdDataset& v
     opt_d_ = std::make_unique<torch::optim::Adam>(nets_->d->parameters(), adam(config_.lr_d));
   if (nets_->e)
     opt_e_ = std::make_unique<torch::optim::Adam>(nets_->e->parameters(), adam(config_.lr_enet));
-  if (load) {
+  if (!warm_from.empty()) {
+    // G (and ENET when both have one) from the file; D and the optimisers stay fresh.
+    const bool with_enet = nets_->e && source.config.enet;
+    LoadWeights(warm_from, *nets_, with_enet);
+    meta_ = source;
+    meta_.config = config_;
+    meta_.inference_only = false;
+    meta_.lr_scale = 1.0;
+    meta_.rollbacks = 0;
+    if (!with_enet) meta_.phase2_step = 0;
+  } else if (load) {
     meta_ = LoadCheckpoint(checkpoint_path_, *nets_, {opt_g_.get(), opt_d_.get(), opt_e_.get()},
                            /*restore_rng=*/true);
     meta_.config = config_;
@@ -509,7 +536,8 @@ TrainReport Run::Go(const scene::RgbdDataset& train, const scene::RgbdDataset& v
   Log({{"event", "start"},
        {"config", config_.name},
        {"model", config_.model},
-       {"resume", load},
+       {"resume", load && warm_from.empty()},
+       {"warm_start", warm_from},
        {"phase1_step", meta_.phase1_step},
        {"phase2_step", meta_.phase2_step},
        {"train_frames", train.frames.size()},

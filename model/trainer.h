@@ -20,7 +20,13 @@ struct TrainerOptions {
   int phase = 0;            ///< 0 = phase 1 then 2, 1 = phase 1 only, 2 = phase 2 only
   int steps = -1;           ///< >= 0: run to this many steps in each phase run (else the config's)
   int threads = 2;          ///< torch::set_num_threads
-  bool resume = false;      ///< continue from out_dir/checkpoint.pt exactly
+  /// Continue from out_dir/checkpoint.pt exactly. If that file is an inference checkpoint (an
+  /// exported file copied there), this is a warm start from it instead (see init_from).
+  bool resume = false;
+  /// Warm start when not resuming: G and ENET weights, pose normalisation, camera and step
+  /// counters come from this checkpoint (full or inference; same network shape as the config),
+  /// D and the optimisers start fresh. Training continues to `steps` counted from its steps.
+  std::string init_from;
   bool progress = true;     ///< progress bar on stderr
   int max_val_frames = 32;  ///< held-out frames used for the validation PSNR
   int max_rollbacks = 5;    ///< divergence-guard rollbacks before giving up
@@ -62,6 +68,22 @@ class Trainer {
   P2iConfig config_;
   TrainerOptions options_;
 };
+
+/// What ExportInference wrote.
+struct ExportReport {
+  int64_t in_bytes = 0;
+  int64_t out_bytes = 0;
+  int64_t parameters = 0;  ///< G + ENET
+  int phase1_steps = 0;
+  int phase2_steps = 0;
+};
+
+/// Writes an inference checkpoint (atomically): the metadata (format version, config, pose
+/// normalisation, resolution, camera, steps) with G and ENET only; no D, optimiser or RNG state.
+/// LoadSynthesizer renders it exactly like the full checkpoint, and Trainer can warm-start from
+/// it (TrainerOptions::init_from). Throws std::runtime_error naming the file on a missing input,
+/// another format version or a write failure.
+ExportReport ExportInference(const std::string& in_checkpoint, const std::string& out_path);
 
 /// A procedural RGB-D scene for tests and `--data procedural`: a textured room seen from poses
 /// along a smooth loop, rendered analytically at `size` x `size` (no external renderer).

@@ -45,13 +45,14 @@ scene::RgbdDataset RenderBuiltin(const std::string& name, int frames, int side, 
 
 int Train(const model::P2iConfig& config, const scene::RgbdDataset& train,
           const scene::RgbdDataset& val, const std::string& out_dir, int phase, int steps,
-          int threads, bool resume, bool quiet) {
+          int threads, bool resume, bool quiet, const std::string& init_from) {
   model::TrainerOptions options;
   options.out_dir = out_dir;
   options.phase = phase;
   options.steps = steps;
   options.threads = threads;
   options.resume = resume;
+  options.init_from = init_from;
   options.progress = !quiet;
   model::Trainer trainer(config, options);
   const auto report = trainer.Run(train, val);
@@ -67,7 +68,7 @@ int RunTrain(const std::vector<std::string>& args) {
   CLI::App app{"Train P2I-NET (phase 1: G+D adversarial, phase 2: ENET) or the CNN baseline.\n"
                "Writes DIR/checkpoint.pt (atomic) and DIR/train_log.jsonl.",
                "p2i train"};
-  std::string config_path, data, split_file, out_dir;
+  std::string config_path, data, split_file, out_dir, init_from;
   int phase = 0, steps = -1, threads = 2, frames = 300, holdout_every = 10;
   bool resume = false, quiet = false;
   app.add_option("config", config_path, "model config YAML (e.g. model/presets/default.yaml)")
@@ -87,6 +88,9 @@ int RunTrain(const std::vector<std::string>& args) {
                  "without --split: every N-th frame is held out for validation PSNR");
   app.add_flag("--resume", resume, "continue exactly from DIR/checkpoint.pt");
   app.add_flag("--quiet", quiet, "no progress bar");
+  app.add_option("--init-from", init_from,
+                 "warm start (without --resume): G/ENET weights, pose normalisation and step "
+                 "counters from this checkpoint (full or `p2i export`ed); D and optimisers fresh");
   std::vector<std::string> rev(args.rbegin(), args.rend() - 1);
   try {
     app.parse(rev);
@@ -112,7 +116,7 @@ int RunTrain(const std::vector<std::string>& args) {
                    split.train.size(), split.test.size(), data.c_str());
       scene::RgbdDataset train = index.SelectIds(split.train).LoadAll();
       scene::RgbdDataset val = index.SelectIds(split.test).LoadAll();
-      return Train(config, train, val, out_dir, phase, steps, threads, resume, quiet);
+      return Train(config, train, val, out_dir, phase, steps, threads, resume, quiet, init_from);
     }
     std::fprintf(stderr, "loading %zu frames of %s...\n", index.size(), data.c_str());
     all = index.LoadAll();
@@ -124,7 +128,7 @@ int RunTrain(const std::vector<std::string>& args) {
   for (size_t i = 0; i < all.frames.size(); ++i)
     (holdout_every > 0 && i % holdout_every == static_cast<size_t>(holdout_every / 2) ? val : train)
         .frames.push_back(all.frames[i]);
-  return Train(config, train, val, out_dir, phase, steps, threads, resume, quiet);
+  return Train(config, train, val, out_dir, phase, steps, threads, resume, quiet, init_from);
 }
 
 P2I_COMMAND("train", "Train P2I-NET or the CNN baseline from a config preset", RunTrain);
