@@ -1,0 +1,657 @@
+/// @file bench_runner.cc
+#include "eval/bench_runner.h"
+
+#include <sys/resource.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <ctime>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <memory>
+#include <optional>
+#include <random>
+#include <set>
+#include <sstream>
+#include <thread>
+
+#include <nlohmann/json.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "eval/bench_config.h"
+#include "eval/charts.h"
+#include "eval/report.h"
+#include "eval/results.h"
+#include "eval/stats.h"
+#include "eval/strips.h"
+#include "model/baseline_nearest.h"
+#include "model/baseline_warp.h"
+#include "model/coverage.h"
+#include "model/lpips.h"
+#include "model/metrics.h"
+#include "model/p2i_synthesizer.h"
+#include "model/trainer.h"
+#include "scene/capture.h"
+#include "scene/dataset_loader.h"
+#include "scene/image_ops.h"
+#include "scene/sim_scene.h"
+#include "scene/splits.h"
+#include "scene/trajectory.h"
+
+namespace p2i::eval {
+namespace fs = std::filesystem;
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double Since(Clock::time_point t) {
+  return std::chrono::duration<double>(Clock::now() - t).count();
+}
+
+std::string UtcNow() {
+  const std::time_t t = std::time(nullptr);
+  char buf[64];
+  std::strftime(buf, sizeof(buf), "%Y-%m-%d %H:%M:%S", std::gmtime(&t));
+  return buf;
+}
+
+std::string LoadAverage() {
+  std::ifstream in("/proc/loadavg");
+  double a = 0, b = 0, c = 0;
+  in >> a >> b >> c;
+  char buf[64];
+  std::snprintf(buf, sizeof(buf), "%.2f %.2f %.2f", a, b, c);
+  return buf;
+}
+
+std::string Fixed(double v, int digits = 2) {
+  if (!std::isfinite(v)) return "n/a";
+  char buf[64];
+  std::snprintf(buf, sizeof(buf), "%.*f", digits, v);
+  return buf;
+}
+
+// ---------------------------------------------------------------- data
+struct Data {
+  scene::DatasetIndex index;
+  std::optional<scene::SimScene> sim;  // set for sim scenes: exact ground truth anywhere
+  std::string description;
+};
+
+Data PrepareData(const BenchConfig& c, const std::string& out_dir, bool quiet) {
+  Data data;
+  const auto& d = c.dataset;
+  if (d.IsSim()) {
+    data.sim = scene::SimScene::FromSpec(d.scene);
+    int side = d.render_size;
+    for (const auto& s : c.sizes) side = std::max(side, s.resolution);
+    const scene::CameraInfo camera = scene::SimScene::DefaultCamera(side, side);
+    scene::AdjacentSweepsOptions sweeps;
+    sweeps.sweep.heights = d.heights;
+    sweeps.sweep.speed = d.speed;
+    sweeps.count = d.trajectories;
+    sweeps.offset = d.trajectory_offset;
+    sweeps.Validate();
+    const auto trajectories = scene::GenerateAdjacentSweeps(sweeps);
+    const fs::path root = fs::path(out_dir) / "dataset";
+    fs::remove_all(root);  // deterministic: re-rendered identically on a resumed run
+    size_t total = 0;
+    for (size_t k = 0; k < trajectories.size(); ++k) {
+      char name[32];
+      std::snprintf(name, sizeof(name), "seq-%02zu", k + 1);
+      scene::CaptureWriter writer((root / name).string(), camera, {true, false});
+      int kept = 0;
+      for (size_t i = 0; i < trajectories[k].size(); i += d.frame_step) {
+        if (d.max_frames > 0 && kept >= d.max_frames) break;
+        const auto& p = trajectories[k][i];
+        writer.Append(data.sim->Render(p.pose, camera, p.stamp));
+        ++kept;
+      }
+      total += kept;
+    }
+    data.index = scene::OpenDataset(root.string());
+    data.description = "sim scene `" + d.scene + "`, " + std::to_string(trajectories.size()) +
+                       " adjacent arm sweeps (" + Fixed(d.trajectory_offset, 2) + " m apart), " + std::to_string(total) + " frames rendered at " +
+                       std::to_string(side) + "x" + std::to_string(side) + " (exact, no noise)";
+  } else {
+    scene::DatasetOptions o;
+    o.format = d.format;
+    o.seven_scenes_invalid_depth = d.seven_scenes_invalid_depth;
+    const scene::DatasetIndex all = scene::OpenDataset(d.path, o);
+    std::vector<scene::FrameRef> frames;
+    std::map<std::string, int> seen, kept;
+    for (const auto& f : all.frames()) {
+      const int i = seen[f.sequence]++;
+      if (i % d.frame_step != 0) continue;
+      if (d.max_frames > 0 && kept[f.sequence] >= d.max_frames) continue;
+      ++kept[f.sequence];
+      frames.push_back(f);
+    }
+    data.index = scene::DatasetIndex(all.camera(), all.depth_encoding(), frames);
+    data.description = "dataset folder `" + d.path + "` (" + scene::DetectDatasetFormat(d.path) +
+                       "), " + std::to_string(frames.size()) + " frames in " +
+                       std::to_string(data.index.Sequences().size()) + " sequence(s)";
+  }
+  if (!quiet) std::printf("data: %s\n", data.description.c_str());
+  return data;
+}
+
+scene::Split MakeSplit(const BenchConfig& c, const scene::DatasetIndex& index,
+                       const std::string& setting) {
+  const auto seqs = index.Sequences();
+  scene::Split split;
+  if (setting[0] == 'a') {
+    split = scene::MakeMissingFramesSplit(index, HeldOutOf(setting), c.period);
+    if (split.test.empty())
+      throw std::runtime_error(c.source + ": setting " + setting +
+                               " holds out no frame (every sequence is shorter than period + N = " +
+                               std::to_string(c.period + HeldOutOf(setting)) +
+                               " frames): lower 'period' or use more frames");
+  } else if (setting == "b") {
+    if (seqs.size() < 2 && c.b_train.empty())
+      throw std::runtime_error(c.source + ": setting b needs 2 sequences; the data has " +
+                               std::to_string(seqs.size()) + " (add split_b or trajectories)");
+    split = scene::MakeAdjacentTrajectorySplit(index, c.b_train.empty() ? seqs[0] : c.b_train,
+                                               c.b_test.empty() ? seqs[1] : c.b_test);
+  } else {
+    std::vector<std::string> train = c.c_train, test = c.c_test;
+    if (train.empty()) {
+      if (seqs.size() < 3)
+        throw std::runtime_error(c.source + ": setting c needs 3 sequences by default; the data has " +
+                                 std::to_string(seqs.size()) + " (add split_c: {train, test})");
+      test = {seqs[seqs.size() / 2]};
+      for (const auto& s : seqs)
+        if (s != test[0]) train.push_back(s);
+    }
+    split = scene::MakeCrossTrajectorySplit(index, train, test);
+  }
+  return split;
+}
+
+std::vector<std::string> Subsample(const std::vector<std::string>& ids, size_t max_count) {
+  if (ids.size() <= max_count) return ids;
+  std::vector<std::string> out;
+  for (size_t i = 0; i < max_count; ++i) {
+    const size_t j = max_count == 1 ? 0 : (i * (ids.size() - 1) + (max_count - 1) / 2) / (max_count - 1);
+    out.push_back(ids[j]);
+  }
+  return out;
+}
+
+// Frames resized to a resolution, loaded once.
+class FrameCache {
+ public:
+  explicit FrameCache(const scene::DatasetIndex& index) : index_(index) {}
+  scene::RgbdDataset Get(const std::vector<std::string>& ids, int res) {
+    scene::RgbdDataset out;
+    out.camera = scene::CenterCropResizeCamera(index_.camera(), res, res);
+    auto& cache = cache_[res];
+    for (const auto& id : ids) {
+      auto it = cache.find(id);
+      if (it == cache.end()) {
+        const int i = index_.Find(id);
+        if (i < 0) throw std::runtime_error("frame " + id + " not in the dataset");
+        it = cache.emplace(id, scene::CenterCropResizeSample(index_.Load(i), res, res)).first;
+      }
+      out.frames.push_back(it->second);
+    }
+    return out;
+  }
+
+ private:
+  const scene::DatasetIndex& index_;
+  std::map<int, std::map<std::string, scene::RgbdSample>> cache_;
+};
+
+// ---------------------------------------------------------------- evaluation
+void Evaluate(model::ViewSynthesizer& method, const scene::RgbdDataset& test,
+              const model::LpipsSqueeze* lpips, const model::CoverageScorer& coverage,
+              int threads, ResultRow* row) {
+  // Warm-up (first-call allocations are not part of the latency).
+  for (int i = 0; i < 2 && !test.frames.empty(); ++i) (void)method.Render(test.frames[0].pose);
+  model::LatencyRecorder rec(threads);
+  double sum_abs_rel = 0, sum_sq = 0;
+  int64_t valid = 0, gt_valid = 0;
+  std::vector<double> psnr, ssim, lp, cov;
+  row->views.clear();
+  for (const auto& gt : test.frames) {
+    rec.Start();
+    model::View v = method.Render(gt.pose);
+    rec.Stop();
+    if (v.rgb.size() != gt.rgb.size()) cv::resize(v.rgb, v.rgb, gt.rgb.size(), 0, 0, cv::INTER_AREA);
+    if (!v.depth.empty() && v.depth.size() != gt.depth.size())
+      cv::resize(v.depth, v.depth, gt.depth.size(), 0, 0, cv::INTER_NEAREST);
+    ViewRecord rec_view;
+    rec_view.id = gt.id;
+    rec_view.psnr = model::Psnr(v.rgb, gt.rgb);
+    rec_view.ssim = model::Ssim(v.rgb, gt.rgb);
+    rec_view.lpips = lpips ? lpips->Distance(v.rgb, gt.rgb) : std::nan("");
+    rec_view.coverage = coverage.Score(gt.pose);
+    if (!v.depth.empty()) {
+      const auto de = model::ComputeDepthErrors(v.depth, gt.depth);
+      if (de.valid_pixels > 0) {
+        sum_abs_rel += de.abs_rel * de.valid_pixels;
+        sum_sq += de.rmse_m * de.rmse_m * de.valid_pixels;
+      }
+      valid += de.valid_pixels;
+      gt_valid += de.gt_valid_pixels;
+    }
+    psnr.push_back(rec_view.psnr);
+    ssim.push_back(rec_view.ssim);
+    lp.push_back(rec_view.lpips);
+    cov.push_back(rec_view.coverage);
+    row->views.push_back(rec_view);
+  }
+  const auto lat = rec.Summary();
+  row->test_views = static_cast<int>(test.frames.size());
+  row->psnr = ComputeSpread(psnr).mean;
+  row->ssim = ComputeSpread(ssim).mean;
+  row->lpips = lpips ? ComputeSpread(lp).mean : std::nan("");
+  row->depth_abs_rel = valid > 0 ? sum_abs_rel / valid : std::nan("");
+  row->depth_rmse_m = valid > 0 ? std::sqrt(sum_sq / valid) : std::nan("");
+  row->depth_valid_fraction = gt_valid > 0 ? double(valid) / gt_valid : std::nan("");
+  row->views_per_s = lat.views_per_second;
+  row->latency_p50_ms = lat.p50_ms;
+  row->latency_p99_ms = lat.p99_ms;
+  row->threads = threads;
+  row->coverage_spearman = SpearmanRho(cov, psnr);
+  row->params = static_cast<double>(method.ParameterCount());
+  row->flops_per_view = method.FlopsPerView();
+}
+
+// ---------------------------------------------------------------- stability
+struct StabilitySample {
+  std::string kind;
+  double offset;
+  scene::Pose pose;
+  scene::RgbdSample gt;
+  double nearest;
+};
+
+std::vector<StabilitySample> MakeStabilitySamples(const StabilitySpec& spec,
+                                                  const scene::SimScene& sim,
+                                                  const scene::CameraInfo& camera,
+                                                  const std::vector<scene::Pose>& train) {
+  std::vector<StabilitySample> out;
+  const model::CoverageScorer scorer(train);
+  std::mt19937 rng(20261201);
+  std::normal_distribution<double> n01;
+  auto random_unit = [&]() {
+    Eigen::Vector3d v(n01(rng), n01(rng), n01(rng));
+    return v.norm() > 1e-9 ? Eigen::Vector3d(v.normalized()) : Eigen::Vector3d::UnitX();
+  };
+  const int n = std::min<int>(spec.poses, static_cast<int>(train.size()));
+  for (int i = 0; i < n; ++i) {
+    const size_t j = n == 1 ? 0 : static_cast<size_t>(i) * (train.size() - 1) / (n - 1);
+    const scene::Pose& base = train[j];
+    for (double d : spec.translations_m) {
+      std::optional<scene::Pose> pose;
+      for (int attempt = 0; attempt < 50 && !pose; ++attempt) {
+        const Eigen::Vector3d t = base.translation() + d * random_unit();
+        if (d == 0.0 || sim.IsFree(t, 0.1)) pose = scene::Pose(t, base.rotation());
+      }
+      if (!pose) continue;
+      out.push_back({"translation", d, *pose, sim.Render(*pose, camera),
+                     scorer.NearestDistance(*pose)});
+    }
+    for (double a : spec.rotations_deg) {
+      const Eigen::Quaterniond q =
+          base.rotation() * Eigen::Quaterniond(Eigen::AngleAxisd(a * M_PI / 180.0, random_unit()));
+      const scene::Pose pose(base.translation(), q);
+      out.push_back({"rotation", a, pose, sim.Render(pose, camera), scorer.NearestDistance(pose)});
+    }
+  }
+  return out;
+}
+
+std::vector<StabilityPoint> RunStability(model::ViewSynthesizer& method, const std::string& name,
+                                         const std::vector<StabilitySample>& samples) {
+  std::map<std::pair<std::string, double>, std::vector<double>> psnr, ssim, dist;
+  for (const auto& s : samples) {
+    model::View v = method.Render(s.pose);
+    if (v.rgb.size() != s.gt.rgb.size()) cv::resize(v.rgb, v.rgb, s.gt.rgb.size(), 0, 0, cv::INTER_AREA);
+    const auto key = std::make_pair(s.kind, s.offset);
+    psnr[key].push_back(model::Psnr(v.rgb, s.gt.rgb));
+    ssim[key].push_back(model::Ssim(v.rgb, s.gt.rgb));
+    dist[key].push_back(s.nearest);
+  }
+  std::vector<StabilityPoint> out;
+  for (const auto& [key, values] : psnr) {
+    StabilityPoint p;
+    p.method = name;
+    p.kind = key.first;
+    p.offset = key.second;
+    p.psnr = ComputeSpread(values).mean;
+    p.ssim = ComputeSpread(ssim[key]).mean;
+    p.nearest_distance = ComputeSpread(dist[key]).mean;
+    p.n = static_cast<int>(values.size());
+    out.push_back(p);
+  }
+  return out;
+}
+
+void SaveStability(const std::string& out_dir, const std::vector<StabilityPoint>& points) {
+  nlohmann::json arr = nlohmann::json::array();
+  std::string csv = "method,kind,offset,psnr_db,ssim,nearest_distance,n\n";
+  for (const auto& p : points) {
+    arr.push_back({{"method", p.method}, {"kind", p.kind}, {"offset", p.offset},
+                   {"psnr_db", p.psnr}, {"ssim", p.ssim}, {"nearest_distance", p.nearest_distance},
+                   {"n", p.n}});
+    char buf[256];
+    std::snprintf(buf, sizeof(buf), "%s,%s,%.6g,%.6g,%.6g,%.6g,%d\n", p.method.c_str(),
+                  p.kind.c_str(), p.offset, p.psnr, p.ssim, p.nearest_distance, p.n);
+    csv += buf;
+  }
+  scene::WriteFileAtomic(out_dir + "/stability.json", arr.dump(1) + "\n");
+  scene::WriteFileAtomic(out_dir + "/stability.csv", csv);
+}
+
+std::vector<StabilityPoint> LoadStability(const std::string& out_dir) {
+  std::vector<StabilityPoint> out;
+  const std::string path = out_dir + "/stability.json";
+  if (!fs::exists(path)) return out;
+  std::ifstream in(path);
+  try {
+    for (const auto& j : nlohmann::json::parse(in)) {
+      StabilityPoint p;
+      p.method = j.at("method");
+      p.kind = j.at("kind");
+      p.offset = j.at("offset");
+      p.psnr = j.at("psnr_db").is_null() ? NAN : j.at("psnr_db").get<double>();
+      p.ssim = j.at("ssim").is_null() ? NAN : j.at("ssim").get<double>();
+      p.nearest_distance = j.value("nearest_distance", 0.0);
+      p.n = j.value("n", 0);
+      out.push_back(p);
+    }
+  } catch (const std::exception& e) {
+    throw std::runtime_error(path + ": malformed: " + e.what());
+  }
+  return out;
+}
+
+
+}  // namespace
+
+std::string FindLpipsWeights(const std::string& option) {
+  const std::string resolved = model::LpipsSqueeze::ResolveWeightsPath(option);
+  if (!resolved.empty()) return resolved;
+  const fs::path shared =
+      fs::path(P2I_EVAL_SHARED_DIR) / "models" / "lpips" / "lpips_squeeze_v0.1.pth";
+  if (fs::exists(shared)) return shared.string();
+  return "";
+}
+
+int RunBench(const BenchOptions& options) {
+  const BenchConfig c = BenchConfig::FromYamlFile(options.config_path);
+  const std::string out_dir =
+      options.out_dir.empty()
+          ? (fs::path("bench_out") / fs::path(options.config_path).stem()).string()
+          : options.out_dir;
+  const int threads = options.threads > 0 ? options.threads : c.threads;
+  const double margin = options.auto_size_margin_db >= 0 ? options.auto_size_margin_db
+                                                         : c.auto_size.margin_db;
+  fs::create_directories(out_dir);
+  const std::string started = UtcNow();
+  const std::string load_start = LoadAverage();
+  const bool quiet = options.quiet;
+
+  ResultsStore store(out_dir, c.Hash());
+  if (options.fresh) {
+    for (const char* f : {"results.csv", "results.json", "stability.json", "stability.csv"})
+      fs::remove(fs::path(out_dir) / f);
+    fs::remove_all(fs::path(out_dir) / "runs");
+    fs::remove_all(fs::path(out_dir) / "strips");
+  }
+  const size_t resumed = store.LoadExisting();
+  if (resumed > 0 && !quiet)
+    std::printf("resuming: %zu row(s) already in %s\n", resumed, store.json_path().c_str());
+  std::vector<StabilityPoint> stability = LoadStability(out_dir);
+
+  // LPIPS-Squeeze: reported as missing (never 0) when no weights are found.
+  std::string lpips_status;
+  std::unique_ptr<model::LpipsSqueeze> lpips;
+  {
+    const std::string path =
+        FindLpipsWeights(!options.lpips_weights.empty() ? options.lpips_weights : c.lpips_weights);
+    std::string why;
+    lpips = model::LpipsSqueeze::TryLoad(path, &why);
+    lpips_status = lpips ? "weights " + lpips->weights_path()
+                         : "missing (" + (why.empty() ? std::string(model::kLpipsUnavailableMessage) : why) +
+                               "; also looked at ../shared/models/lpips beside the checkout)";
+    if (!lpips) std::fprintf(stderr, "warning: LPIPS-Squeeze %s\n", lpips_status.c_str());
+  }
+
+  std::optional<Data> data;
+  std::vector<std::pair<std::string, std::string>> strips;
+  if (!options.report_only) {
+    data = PrepareData(c, out_dir, quiet);
+    FrameCache cache(data->index);
+    fs::create_directories(fs::path(out_dir) / "splits");
+    size_t total = 0, done = 0;
+    for (const auto& setting : c.settings)
+      for (const auto& size : c.sizes)
+        for (const auto& m : c.methods) total += c.RunsOf(m, setting, size).size();
+    for (const auto& setting : c.settings) {
+      const scene::Split split = MakeSplit(c, data->index, setting);
+      split.ToYamlFile((fs::path(out_dir) / "splits" / (setting + ".yaml")).string());
+      const auto test_ids = Subsample(split.test, static_cast<size_t>(c.max_test_views));
+      const auto strip_ids = Subsample(test_ids, static_cast<size_t>(c.strip_views));
+      const std::string strip_dir = (fs::path(out_dir) / "strips" / setting).string();
+      const SizeSpec* strip_at = nullptr;  // strips at the first size that runs here
+      for (const auto& size : c.sizes) {
+        bool any_run = false;
+        for (const auto& m : c.methods) any_run = any_run || !c.RunsOf(m, setting, size).empty();
+        if (!any_run) continue;
+        if (!strip_at) strip_at = &size;
+        const scene::RgbdDataset train = cache.Get(split.train, size.resolution);
+        const scene::RgbdDataset test = cache.Get(test_ids, size.resolution);
+        std::vector<scene::Pose> train_poses;
+        for (const auto& f : train.frames) train_poses.push_back(f.pose);
+        const model::CoverageScorer coverage(train_poses);
+        const bool strip_size = &size == strip_at && c.strip_views > 0;
+        if (strip_size) {
+          const auto gt = cache.Get(strip_ids, size.resolution);
+          for (size_t k = 0; k < gt.frames.size(); ++k)
+            SaveStripView(strip_dir + "/ground_truth", static_cast<int>(k), gt.frames[k]);
+        }
+        const bool stab_here = data->sim && c.stability.enabled &&
+                               setting == c.stability.setting && size.name == c.stability.size;
+        std::vector<StabilitySample> stab_samples;
+        bool stab_samples_made = false;
+        for (const auto& m : c.methods) {
+          const auto seeds = c.RunsOf(m, setting, size);
+          for (int seed : seeds) {
+            ++done;
+            ResultRow row;
+            row.method = m.name;
+            row.method_type = m.type;
+            row.setting = setting;
+            row.size = size.name;
+            row.resolution = size.resolution;
+            row.seed = seed;
+            row.train_frames = static_cast<int>(train.frames.size());
+            const bool have_row = store.Has(row.Key());
+            const bool want_strip =
+                strip_size && seed == seeds.front() && !fs::exists(strip_dir + "/" + m.name + "/0_rgb.png");
+            bool have_stab = false;
+            for (const auto& p : stability) have_stab = have_stab || p.method == m.name;
+            const bool want_stab = stab_here && seed == seeds.front() && !have_stab;
+            if (have_row && !want_strip && !want_stab) continue;
+
+            const auto t0 = Clock::now();
+            std::unique_ptr<model::ViewSynthesizer> synth;
+            if (m.type == "nearest") {
+              synth = std::make_unique<model::NearestKeyframe>(train);
+            } else if (m.type == "warp") {
+              model::DepthWarpOptions wo;
+              wo.k = m.warp_k;
+              wo.fill_holes = m.warp_fill_holes;
+              synth = std::make_unique<model::DepthWarp>(train, wo);
+            } else {
+              const model::P2iConfig mc = c.ModelConfig(m, size, seed);
+              const std::string run_dir = (fs::path(out_dir) / "runs" / m.name / setting /
+                                           size.name / ("seed" + std::to_string(seed))).string();
+              const std::string ckpt = model::Trainer::CheckpointPath(run_dir);
+              if (!have_row || !fs::exists(ckpt)) {
+                model::TrainerOptions to;
+                to.out_dir = run_dir;
+                to.threads = threads;
+                to.progress = !quiet && isatty(2);
+                to.resume = fs::exists(ckpt);
+                if (!quiet)
+                  std::printf("[%zu/%zu] training %s (%s) on %s, %d frames at %dx%d, seed %d: %d + %d steps...\n",
+                              done, total, m.name.c_str(), mc.model.c_str(), setting.c_str(),
+                              row.train_frames, size.resolution, size.resolution, seed,
+                              mc.steps_phase1, mc.IsBaseline() || !mc.enet ? 0 : mc.steps_phase2);
+                std::fflush(stdout);
+                model::TrainReport tr;
+                try {
+                  tr = model::Trainer(mc, to).Run(train, scene::RgbdDataset{train.camera, {}});
+                } catch (const std::exception& e) {
+                  if (!to.resume) throw;
+                  std::fprintf(stderr, "resume of %s failed (%s): training from scratch\n",
+                               run_dir.c_str(), e.what());
+                  fs::remove_all(run_dir);
+                  to.resume = false;
+                  tr = model::Trainer(mc, to).Run(train, scene::RgbdDataset{train.camera, {}});
+                }
+                row.train_s = Since(t0);
+                row.train_steps_phase1 = tr.phase1_steps;
+                row.train_steps_phase2 = tr.phase2_steps;
+              }
+              model::SynthesizerOptions so;
+              so.threads = threads;
+              synth = model::LoadSynthesizer(ckpt, so);
+            }
+            if (!m.IsLearned()) row.train_s = Since(t0);  // index building
+            if (!have_row) {
+              Evaluate(*synth, test, lpips.get(), coverage, m.IsLearned() ? threads : 1, &row);
+              store.Add(row);
+              if (!quiet)
+                std::printf("[%zu/%zu] %s %s %s seed %d: PSNR %s dB, SSIM %s, LPIPS-Squeeze %s, "
+                            "AbsRel %s, %s views/s (p50 %s ms, p99 %s ms), train %s s\n",
+                            done, total, m.name.c_str(), setting.c_str(), size.name.c_str(), seed,
+                            Fixed(row.psnr).c_str(), Fixed(row.ssim, 3).c_str(),
+                            Fixed(row.lpips, 3).c_str(), Fixed(row.depth_abs_rel, 3).c_str(),
+                            Fixed(row.views_per_s, 1).c_str(), Fixed(row.latency_p50_ms, 1).c_str(),
+                            Fixed(row.latency_p99_ms, 1).c_str(), Fixed(row.train_s, 0).c_str());
+              std::fflush(stdout);
+            }
+            if (want_strip) {
+              for (size_t k = 0; k < strip_ids.size(); ++k) {
+                const auto gt = cache.Get({strip_ids[k]}, size.resolution);
+                SaveStripView(strip_dir + "/" + m.name, static_cast<int>(k),
+                              synth->Render(gt.frames[0].pose));
+              }
+            }
+            if (want_stab) {
+              if (!stab_samples_made) {
+                stab_samples = MakeStabilitySamples(c.stability, *data->sim, train.camera, train_poses);
+                stab_samples_made = true;
+              }
+              const auto pts = RunStability(*synth, m.name, stab_samples);
+              stability.insert(stability.end(), pts.begin(), pts.end());
+              SaveStability(out_dir, stability);
+            }
+          }
+        }
+      }
+    }
+  } else if (!fs::exists(store.json_path())) {
+    throw std::runtime_error("--report-only: no " + store.json_path() + " to report on");
+  }
+
+  // Strips.
+  std::vector<std::string> strip_rows = {"ground_truth"};
+  for (const auto& m : c.methods) strip_rows.push_back(m.name);
+  if (c.strip_views > 0)
+    for (const auto& setting : c.settings) {
+      const std::string dir = (fs::path(out_dir) / "strips" / setting).string();
+      const std::string png = (fs::path(out_dir) / "strips" / (setting + ".png")).string();
+      if (ComposeStrip(dir, strip_rows, c.strip_views, png))
+        strips.emplace_back(setting, "strips/" + setting + ".png");
+    }
+
+  // Charts.
+  ChartInputs ci;
+  ci.rows = store.rows();
+  ci.settings = c.settings;
+  for (const auto& m : c.methods) ci.methods.push_back(m.name);
+  for (const auto& s : c.sizes) ci.sizes.push_back(s.name);
+  ci.primary_setting = c.auto_size.setting;  // the setting with the ladder and the seeds
+  ci.stability = stability;
+  ci.threshold_db = c.stability.threshold_db;
+  const ChartOutputs charts = WriteCharts(ci, (fs::path(out_dir) / "charts").string());
+  if (!charts.note.empty()) std::fprintf(stderr, "note: %s\n", charts.note.c_str());
+
+  // Auto-size over the ladder.
+  std::vector<std::string> auto_size;
+  if (c.sizes.size() > 1 && !c.auto_size.method.empty()) {
+    std::vector<SizeCandidate> cands;
+    for (const auto& s : c.sizes) {
+      SizeCandidate k;
+      k.name = s.name;
+      k.psnr_db = MeanOver(store.rows(), c.auto_size.method, c.auto_size.setting, s.name, "psnr");
+      k.params = MeanOver(store.rows(), c.auto_size.method, c.auto_size.setting, s.name, "params");
+      k.flops = MeanOver(store.rows(), c.auto_size.method, c.auto_size.setting, s.name, "flops");
+      k.views_per_s =
+          MeanOver(store.rows(), c.auto_size.method, c.auto_size.setting, s.name, "views_per_s");
+      cands.push_back(k);
+    }
+    const AutoSizeChoice choice = ChooseAutoSize(cands, margin);
+    std::ostringstream os;
+    os << "Ladder of `" << c.auto_size.method << "` on setting " << c.auto_size.setting
+       << " (margin " << Fixed(margin) << " dB PSNR):\n\n| size | PSNR dB | params | GFLOP/view | views/s |\n|---|---|---|---|---|\n";
+    for (size_t i = 0; i < cands.size(); ++i)
+      os << "| " << (int(i) == choice.index ? "**" + cands[i].name + "**" : cands[i].name) << " | "
+         << Fixed(cands[i].psnr_db) << " | " << Fixed(cands[i].params / 1e6, 3) << " M | "
+         << Fixed(cands[i].flops / 1e9, 3) << " | " << Fixed(cands[i].views_per_s, 1) << " |\n";
+    os << "\n--auto-size: " << choice.reason;
+    auto_size.push_back(os.str());
+    scene::WriteFileAtomic(out_dir + "/auto_size.txt", choice.reason + "\n");
+    if (options.auto_size) std::printf("auto-size (%s, setting %s): %s\n", c.auto_size.method.c_str(),
+                                       c.auto_size.setting.c_str(), choice.reason.c_str());
+  } else if (options.auto_size) {
+    std::printf("auto-size: needs at least 2 sizes and a learned method in the config\n");
+  }
+
+  // Report.
+  ReportInputs ri;
+  ri.command = options.command_line.empty() ? "p2i bench " + options.config_path : options.command_line;
+  ri.config_path = options.config_path;
+  ri.dataset = data ? data->description : "(report rebuilt from results.json)";
+  errno = 0;
+  const int nice_value = getpriority(PRIO_PROCESS, 0);
+  ri.machine = std::to_string(std::thread::hardware_concurrency()) + " cores, load average " +
+               load_start + " at start and " + LoadAverage() + " at the end (1/5/15 min); " +
+               std::to_string(threads) + " LibTorch thread(s) for learned methods, baselines on 1; nice " +
+               std::to_string(nice_value);
+  ri.started = started;
+  ri.finished = UtcNow();
+  ri.lpips_status = lpips_status;
+  ri.chart_inputs = ci;
+  ri.charts = charts;
+  ri.strips = strips;
+  ri.auto_size = auto_size;
+  for (const auto& m : c.methods)
+    if (m.IsLearned()) {
+      const auto mc = c.ModelConfig(m, c.sizes.front(), c.SeedsOf(m).front());
+      ri.notes.push_back("`" + m.name + "` trained " + std::to_string(mc.steps_phase1) +
+                         " phase-1 steps" +
+                         (mc.IsBaseline() || !mc.enet ? std::string("")
+                                                      : " + " + std::to_string(mc.steps_phase2) + " ENET steps") +
+                         " at batch " + std::to_string(mc.batch_size) +
+                         " (the paper: tens of thousands): learned rows show an under-trained model "
+                         "when the budget is this small.");
+    }
+  scene::WriteFileAtomic(out_dir + "/report.md", RenderReportMarkdown(ri));
+  if (!quiet)
+    std::printf("wrote %s/results.csv, results.json, charts/, report.md (%zu rows)\n",
+                out_dir.c_str(), store.rows().size());
+  return 0;
+}
+
+}  // namespace p2i::eval

@@ -1,0 +1,93 @@
+/// @file bench_config_test.cc
+/// @brief The bench config: the shipped configs parse; bad ones stop at start-up naming the key
+/// and the file.
+#include <string>
+
+#include <catch2/catch.hpp>
+
+#include "eval/bench_config.h"
+#include "tests/test_paths.h"
+
+using namespace p2i::eval;
+
+namespace {
+const std::string kBase = R"(dataset: {scene: builtin:small_office, max_frames: 20}
+settings: [a1, b]
+period: 10
+methods:
+  - nearest
+  - {name: p2i, preset: default, steps: 4, batch_size: 2, seeds: [1, 2, 3]}
+sizes:
+  - {name: tiny, resolution: 32, model: {g_widths: [16, 16, 8, 8]}}
+  - {name: small, resolution: 32, model: {g_widths: [32, 32, 16, 8]}}
+)";
+
+std::string ErrorOf(const std::string& text) {
+  try {
+    BenchConfig::FromYamlString(text, "my_bench.yaml");
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+  return "";
+}
+}  // namespace
+
+TEST_CASE("Bench configs: the shipped ones parse, defaults and overrides apply", "[unit]") {
+  for (const char* name : {"tiny", "small_office_128", "large_office_128"}) {
+    INFO(name);
+    const auto c = BenchConfig::FromYamlFile(p2i::testing::SourceDir() + "/bench/configs/" + name + ".yaml");
+    CHECK_FALSE(c.methods.empty());
+    CHECK_FALSE(c.sizes.empty());
+  }
+  const BenchConfig c = BenchConfig::FromYamlString(kBase, "my_bench.yaml");
+  REQUIRE(c.methods.size() == 2);
+  CHECK(c.methods[0].type == "nearest");
+  CHECK(c.methods[1].type == "p2i");
+  CHECK(c.SeedsOf(c.methods[0]) == std::vector<int>{1});        // deterministic: one seed
+  CHECK(c.SeedsOf(c.methods[1]) == std::vector<int>{1, 2, 3});  // per-method seeds
+  const auto mc = c.ModelConfig(c.methods[1], c.sizes[1], 2);
+  CHECK(mc.resolution == 32);
+  CHECK(mc.g_widths == std::vector<int>{32, 32, 16, 8});
+  CHECK(mc.steps_phase1 == 4);
+  CHECK(mc.steps_phase2 == 1);  // default: steps / 4
+  CHECK(mc.batch_size == 2);
+  CHECK(mc.seed == 2);
+  CHECK(c.stability.setting == "a1");
+  CHECK(c.auto_size.method == "p2i");
+  CHECK(c.auto_size.margin_db == Approx(0.5));
+  CHECK(HeldOutOf("a20") == 20);
+  CHECK(HeldOutOf("c") == 0);
+}
+
+TEST_CASE("Bench config errors name the key and the file", "[unit]") {
+  // Unknown top-level key.
+  std::string e = ErrorOf(kBase + "treads: 2\n");
+  CHECK(e.find("treads") != std::string::npos);
+  CHECK(e.find("my_bench.yaml") != std::string::npos);
+  // Unknown key inside a method.
+  e = ErrorOf(R"(dataset: {scene: builtin:small_office}
+settings: [a1]
+methods: [{name: warp, kk: 3}]
+sizes: [64]
+)");
+  CHECK(e.find("kk") != std::string::npos);
+  CHECK(e.find("my_bench.yaml:3") != std::string::npos);
+  // A P2iConfig override that does not exist: named with the file and the method.
+  e = ErrorOf(R"(dataset: {scene: builtin:small_office}
+settings: [a1]
+methods: [{name: p2i, config: {widht: 3}}]
+sizes: [64]
+)");
+  CHECK(e.find("widht") != std::string::npos);
+  CHECK(e.find("my_bench.yaml") != std::string::npos);
+  // Unknown setting, unknown method type, unknown preset, missing dataset, N >= period.
+  CHECK(ErrorOf("dataset: {scene: x}\nsettings: [d]\nmethods: [nearest]\nsizes: [64]\n").find("'d'") != std::string::npos);
+  CHECK(ErrorOf("dataset: {scene: x}\nsettings: [a1]\nmethods: [nerf]\nsizes: [64]\n").find("nerf") != std::string::npos);
+  CHECK(ErrorOf("dataset: {scene: x}\nsettings: [a1]\nmethods: [{name: p, type: p2i, preset: nosuch}]\nsizes: [64]\n")
+            .find("nosuch") != std::string::npos);
+  CHECK(ErrorOf("settings: [a1]\nmethods: [nearest]\nsizes: [64]\n").find("dataset") != std::string::npos);
+  CHECK(ErrorOf("dataset: {scene: x}\nsettings: [a20]\nperiod: 10\nmethods: [nearest]\nsizes: [64]\n")
+            .find("period") != std::string::npos);
+  CHECK(ErrorOf("dataset: {scene: x, path: y}\nsettings: [a1]\nmethods: [nearest]\nsizes: [64]\n")
+            .find("exactly one") != std::string::npos);
+}
