@@ -2,6 +2,7 @@
 /// @brief TUM trajectory reading and atomic writing.
 #include "scene/trajectory_io.h"
 
+#include <algorithm>
 #include <cstdio>
 #include <fstream>
 #include <sstream>
@@ -9,7 +10,8 @@
 
 namespace p2i::scene {
 
-std::vector<StampedPose> ParseTumTrajectory(const std::string& text, const std::string& source) {
+std::vector<StampedPose> ParseTumTrajectory(const std::string& text, const std::string& source,
+                                            TumStampOrder order) {
   std::vector<StampedPose> out;
   std::istringstream in(text);
   std::string line;
@@ -26,7 +28,7 @@ std::vector<StampedPose> ParseTumTrajectory(const std::string& text, const std::
       throw std::runtime_error(source + ":" + std::to_string(line_no) + ": " + e.what() +
                                " (expected 'timestamp tx ty tz qx qy qz qw')");
     }
-    if (!out.empty() && !(sp.stamp > out.back().stamp)) {
+    if (order == TumStampOrder::kStrict && !out.empty() && !(sp.stamp > out.back().stamp)) {
       throw std::runtime_error(source + ":" + std::to_string(line_no) + ": timestamp " +
                                std::to_string(sp.stamp) + " is not after the previous one (" +
                                std::to_string(out.back().stamp) +
@@ -34,15 +36,20 @@ std::vector<StampedPose> ParseTumTrajectory(const std::string& text, const std::
     }
     out.push_back(sp);
   }
+  if (order == TumStampOrder::kSort) {
+    std::stable_sort(out.begin(), out.end(), [](const StampedPose& a, const StampedPose& b) {
+      return a.stamp < b.stamp;
+    });
+  }
   return out;
 }
 
-std::vector<StampedPose> ReadTumTrajectory(const std::string& path) {
+std::vector<StampedPose> ReadTumTrajectory(const std::string& path, TumStampOrder order) {
   std::ifstream in(path);
   if (!in) throw std::runtime_error(path + ": cannot open trajectory file");
   std::stringstream ss;
   ss << in.rdbuf();
-  return ParseTumTrajectory(ss.str(), path);
+  return ParseTumTrajectory(ss.str(), path, order);
 }
 
 std::string FormatTumTrajectory(const std::vector<StampedPose>& trajectory,

@@ -12,6 +12,8 @@
 
 #include <opencv2/imgcodecs.hpp>
 
+#include "scene/trajectory_io.h"
+
 namespace p2i::scene {
 namespace {
 
@@ -53,30 +55,6 @@ std::vector<StampedFile> ReadFileList(const fs::path& list, const fs::path& fold
   }
   std::stable_sort(out.begin(), out.end(),
                    [](const StampedFile& a, const StampedFile& b) { return a.stamp < b.stamp; });
-  return out;
-}
-
-std::vector<StampedPose> ReadGroundTruth(const fs::path& path) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error("TUM RGB-D: cannot open '" + path.string() + "'");
-  std::vector<StampedPose> out;
-  std::string line;
-  int number = 0;
-  while (std::getline(in, line)) {
-    ++number;
-    const auto start = line.find_first_not_of(" \t\r");
-    if (start == std::string::npos || line[start] == '#') continue;
-    StampedPose p;
-    try {
-      p.pose = Pose::FromTumLine(line, &p.stamp);
-    } catch (const std::exception& e) {
-      throw std::runtime_error("TUM RGB-D: '" + path.string() + "' line " +
-                               std::to_string(number) + ": " + e.what());
-    }
-    out.push_back(p);
-  }
-  std::stable_sort(out.begin(), out.end(),
-                   [](const StampedPose& a, const StampedPose& b) { return a.stamp < b.stamp; });
   return out;
 }
 
@@ -124,7 +102,7 @@ DatasetIndex ReadTumRgbd(const std::string& folder, const TumRgbdOptions& option
   }
   const auto rgb = ReadFileList(dir / "rgb.txt", dir);
   const auto depth = ReadFileList(dir / "depth.txt", dir);
-  const auto truth = ReadGroundTruth(dir / "groundtruth.txt");
+  const auto truth = ReadTumTrajectory((dir / "groundtruth.txt").string(), TumStampOrder::kSort);
   std::vector<double> rgb_stamps, depth_stamps;
   for (const auto& f : rgb) rgb_stamps.push_back(f.stamp);
   for (const auto& f : depth) depth_stamps.push_back(f.stamp);

@@ -51,3 +51,18 @@ TEST_CASE("TUM trajectory parsing skips comments and blank lines, errors name th
                     Catch::Contains("/nonexistent/gt.txt"));
   CHECK(ParseTumTrajectory("", "empty.txt").empty());
 }
+
+TEST_CASE("TUM trajectories recorded out of order are sorted on request", "[unit]") {
+  using p2i::scene::TumStampOrder;
+  const std::string text =
+      "2.0 2 0 0 0 0 0 1\n"
+      "1.0 1 0 0 0 0 0 1\n"
+      "3.0 3 0 0 0 0 0 1\n";
+  CHECK_THROWS_WITH(ParseTumTrajectory(text, "gt.txt"), Catch::Contains("gt.txt:2"));
+  const auto t = ParseTumTrajectory(text, "gt.txt", TumStampOrder::kSort);
+  REQUIRE(t.size() == 3);
+  for (std::size_t i = 0; i < t.size(); ++i) {
+    CHECK(t[i].stamp == Approx(1.0 + static_cast<double>(i)));
+    CHECK(t[i].pose.translation().x() == Approx(1.0 + static_cast<double>(i)));
+  }
+}
