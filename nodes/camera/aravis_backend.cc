@@ -368,10 +368,8 @@ class AravisBackend : public LiveBackend {
     }
     const DepthImage* best = nullptr;
     for (const DepthImage& d : depth_ring_) {
-      if (std::llabs(d.stamp_ns - stamp) <= tol &&
-          (best == nullptr || std::llabs(d.stamp_ns - stamp) < std::llabs(best->stamp_ns - stamp))) {
-        best = &d;
-      }
+      const int64_t dt = std::llabs(d.stamp_ns - stamp);
+      if (dt <= tol && (best == nullptr || dt < std::llabs(best->stamp_ns - stamp))) best = &d;
     }
     if (best == nullptr) return cv::Mat();
     cv::Mat depth = best->depth;

@@ -369,8 +369,21 @@ void CameraNode::SyncLiveCounters() {
   };
   if (matcher_) {
     const FramePoseMatcher::Counters& c = matcher_->counters();
-    uint64_t dropped_before = reported_.dropped();
-    if (c.dropped() > dropped_before) Count("frames_dropped_no_pose", c.dropped() - dropped_before);
+    const FramePoseMatcher::Counters& r = reported_;
+    if (c.dropped() > r.dropped()) {
+      Count("frames_dropped_no_pose", c.dropped() - r.dropped());
+      std::string why = "too many frames waiting (max_pending)";
+      if (c.dropped_timeout > r.dropped_timeout) {
+        why = "no pose on " + Resolve("pose") + " brackets it within pose_wait";
+      } else if (c.dropped_gap > r.dropped_gap) {
+        why = "the poses around it are farther apart than pose_tolerance";
+      } else if (c.dropped_too_old > r.dropped_too_old) {
+        why = "it is older than the oldest pose kept (the pose stream began after it, or the "
+              "clocks disagree)";
+      }
+      WarnThrottled("no_pose", "dropping frames without a pose: " + why +
+                                   " (counter frames_dropped_no_pose)");
+    }
     add("frames_dropped_pose_too_old", c.dropped_too_old, &reported_.dropped_too_old);
     add("frames_dropped_pose_gap", c.dropped_gap, &reported_.dropped_gap);
     add("frames_dropped_pose_timeout", c.dropped_timeout, &reported_.dropped_timeout);

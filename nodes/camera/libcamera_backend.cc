@@ -37,7 +37,9 @@ class LibcameraBackend : public LiveBackend {
   explicit LibcameraBackend(const LibcameraOptions& o) {
     if (o.buffers < 2) throw std::runtime_error("libcamera: buffers must be >= 2");
     manager_ = std::make_unique<lc::CameraManager>();
-    if (manager_->start() != 0) throw std::runtime_error("libcamera: cannot start the camera manager");
+    if (manager_->start() != 0) {
+      throw std::runtime_error("libcamera: cannot start the camera manager");
+    }
     const auto cameras = manager_->cameras();
     if (cameras.empty()) {
       throw std::runtime_error(

@@ -26,9 +26,10 @@ cv::Mat View(const uint8_t* data, size_t size, int width, int height, int type, 
   const size_t row = static_cast<size_t>(width) * bpp;
   if (stride == 0) stride = row;
   if (stride < row || size < stride * (height - 1) + row) {
-    throw std::invalid_argument("image buffer of " + std::to_string(size) + " bytes is too small for " +
-                                std::to_string(width) + "x" + std::to_string(height) + " at " +
-                                std::to_string(bpp) + " bytes per pixel");
+    throw std::invalid_argument("image buffer of " + std::to_string(size) +
+                                " bytes is too small for " + std::to_string(width) + "x" +
+                                std::to_string(height) + " at " + std::to_string(bpp) +
+                                " bytes per pixel");
   }
   return cv::Mat(height, width, type, const_cast<uint8_t*>(data), stride);
 }

@@ -13,7 +13,9 @@
 namespace p2i::nodes {
 
 /// The pixel formats the live backends convert (GenICam PFNC names).
-enum class PixelFormat { kMono8, kMono16, kRGB8, kBGR8, kBayerRG8, kBayerGR8, kBayerGB8, kBayerBG8 };
+enum class PixelFormat {
+  kMono8, kMono16, kRGB8, kBGR8, kBayerRG8, kBayerGR8, kBayerGB8, kBayerBG8
+};
 
 /// "Mono8" -> kMono8 ... (exact GenICam spelling); nullopt for any other name.
 std::optional<PixelFormat> ParsePixelFormat(const std::string& name);

@@ -18,7 +18,9 @@ LiveFrame Frame(int64_t stamp_ns, uint64_t id) {
   return f;
 }
 
-scene::Pose At(double x) { return scene::Pose(Eigen::Vector3d(x, 0, 0), Eigen::Quaterniond::Identity()); }
+scene::Pose At(double x) {
+  return scene::Pose(Eigen::Vector3d(x, 0, 0), Eigen::Quaterniond::Identity());
+}
 
 FramePoseMatcher::Options Opts() {
   FramePoseMatcher::Options o;
