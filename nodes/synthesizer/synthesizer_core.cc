@@ -133,6 +133,11 @@ bool SynthesizerCore::SwapAsync(const ModelSpec& spec) {
   return true;
 }
 
+std::string SynthesizerCore::LastSwapError() {
+  std::lock_guard<std::mutex> lock(pending_mutex_);
+  return last_swap_error_;
+}
+
 bool SynthesizerCore::WaitForVersion(uint64_t version,
                                      std::chrono::milliseconds timeout) const {
   std::unique_lock<std::mutex> lock(model_mutex_);
@@ -162,7 +167,16 @@ void SynthesizerCore::LoaderLoop() {
       } else {
         Count("stale_versions");
       }
-    } catch (const std::exception&) {
+    } catch (const std::exception& e) {
+      {
+        // A version that failed to load must not block the ones after it: a bogus announcement
+        // (say version 1000 with a missing file) would otherwise make every real version up to
+        // 1000 "stale". Forget it unless something newer is already pending.
+        std::lock_guard<std::mutex> lock(pending_mutex_);
+        if (!pending_ && newest_requested_ == spec.version) newest_requested_ = CurrentVersion();
+        last_swap_error_ = "model version " + std::to_string(spec.version) + " (" +
+                           spec.checkpoint_path + "): " + e.what();
+      }
       Count("swap_failures");
     }
     loading_ = false;

@@ -97,6 +97,8 @@ class SynthesizerCore {
   uint64_t Counter(const std::string& key) const;
   /// Adds to a counter (also forwarded to the hook).
   void Count(const std::string& key, uint64_t n = 1);
+  /// Why the last failed hot-swap load failed ("" if none did). Thread-safe.
+  std::string LastSwapError();
   /// Also forwards every counter increment to `hook` (e.g. Node::Count). Set before serving.
   void SetCountHook(std::function<void(const std::string&, uint64_t)> hook);
   const SynthesizerCoreOptions& options() const { return options_; }
@@ -139,6 +141,7 @@ class SynthesizerCore {
   std::condition_variable pending_cv_;
   std::optional<ModelSpec> pending_;
   uint64_t newest_requested_ = 0;
+  std::string last_swap_error_;
   bool stop_ = false;
   std::atomic<bool> loading_{false};
   std::thread loader_thread_;

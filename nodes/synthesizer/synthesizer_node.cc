@@ -96,6 +96,12 @@ SynthesizerNode::SynthesizerNode(const runtime::NodeArgs& args)
     });
   }
   AddTimer(std::chrono::milliseconds(500), [this] {
+    const std::string swap_error = core_->LastSwapError();
+    if (swap_error != last_swap_error_) {
+      last_swap_error_ = swap_error;
+      Log().warn("hot swap failed, still serving version {}: {}", core_->CurrentVersion(),
+                 swap_error);
+    }
     SetValue("model_version", static_cast<double>(core_->CurrentVersion()));
     SetValue("has_model", core_->HasModel() ? 1.0 : 0.0);
   });

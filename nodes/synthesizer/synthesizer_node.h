@@ -3,6 +3,7 @@
 #pragma once
 
 #include <memory>
+#include <string>
 
 #include "nodes/runtime/node.h"
 #include "nodes/synthesizer/synthesizer_core.h"
@@ -32,6 +33,7 @@ class SynthesizerNode : public runtime::Node {
   std::shared_ptr<runtime::Publisher<msgs::View>> views_pub_;
   std::unique_ptr<TopicRenderer> topic_;
   bool learned_ = false;
+  std::string last_swap_error_;  ///< logged once per new failure
 };
 
 }  // namespace p2i::nodes

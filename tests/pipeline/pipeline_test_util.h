@@ -33,9 +33,12 @@ using Clock = std::chrono::steady_clock;
 /// endpoints). stdout + stderr of the launcher (and so of every node) go to `<run>/launch.log`.
 class LaunchedGraph {
  public:
-  LaunchedGraph(const std::string& launch_file, std::vector<std::string> args) {
+  /// Creates the run dir (the test may bind endpoints in it); Start() launches.
+  LaunchedGraph() {
     out_ = run_.Path() + "/out";
     log_ = run_.Path() + "/launch.log";
+  }
+  void Start(const std::string& launch_file, const std::vector<std::string>& args = {}) {
     std::string cmd = "exec '" + p2i::testing::BinDir() + "/p2i' launch '" + launch_file +
                       "' --run-dir '" + run_.Path() + "' --grace-period 5 out:=" + out_ +
                       " run:=" + run_.Path();

@@ -49,7 +49,8 @@ bool RenderOk(RenderClient* client, const msgs::pb::RenderRequest& request,
 TEST_CASE("launched graph: the synthesizer is killed and respawned, clients retry, the sink "
           "accounts for lost views and keeps everything it acknowledged",
           "[integration]") {
-  LaunchedGraph graph(p2i::testing::SourceDir() + "/tests/pipeline/respawn.yaml", {});
+  LaunchedGraph graph;
+  graph.Start(p2i::testing::SourceDir() + "/tests/pipeline/respawn.yaml");
   const std::string summary_path = graph.Out() + "/summary.json";
   const auto sweep = scene::GenerateArmSweep({});
 

@@ -297,6 +297,7 @@ TEST_CASE("A hot swap whose load fails keeps the old model serving", "[unit]") {
   }
   CHECK(core.Counter("swap_failures") == 1);
   CHECK(core.CurrentVersion() == 1);
+  CHECK(core.LastSwapError().find("broken") != std::string::npos);
   msgs::RenderReplyMsg reply;
   core.HandleRender(Request({0.0}), SynthesizerCore::Clock::now(), &reply);
   CHECK(CheckOneModel(reply) == 1);
@@ -304,6 +305,18 @@ TEST_CASE("A hot swap whose load fails keeps the old model serving", "[unit]") {
   REQUIRE(core.WaitForVersion(3, std::chrono::seconds(10)));
   core.HandleRender(Request({0.0}), SynthesizerCore::Clock::now(), &reply);
   CHECK(CheckOneModel(reply) == 3);
+
+  // A bogus announcement far ahead that fails to load does not block the real versions after
+  // it (they are lower than it but newer than the serving one).
+  REQUIRE(core.SwapAsync({1000, "broken", "p2i"}));
+  const auto deadline2 = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+  while (core.Counter("swap_failures") < 2 && std::chrono::steady_clock::now() < deadline2) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  REQUIRE(core.Counter("swap_failures") == 2);
+  REQUIRE(core.SwapAsync({4, "v4", "p2i"}));
+  REQUIRE(core.WaitForVersion(4, std::chrono::seconds(10)));
+  CHECK(core.CurrentVersion() == 4);
 }
 
 TEST_CASE("LatestSlot keeps only the newest item", "[unit]") {
