@@ -59,8 +59,8 @@ TrainerNode::TrainerNode(const runtime::NodeArgs& args) : Node("trainer", args) 
   const int max_rounds = Declare<int>("max_rounds", -1, "stop training after N rounds (-1 = never)");
   const double status_period =
       Declare<double>("trainer_status_period", 1.0, "s between TrainerStatus messages");
-  shutdown_wait_s_ =
-      Declare<double>("shutdown_wait", 1.0, "s to wait for a training round on shutdown");
+  shutdown_wait_s_ = Declare<double>(
+      "shutdown_wait", 2.0, "s after which a shutdown still waiting for the training step logs it");
 
   model::P2iConfig config =
       config_file.empty() ? model::P2iConfig() : model::P2iConfig::FromYamlFile(config_file);
@@ -157,11 +157,16 @@ void TrainerNode::OnFrame(const msgs::RgbdFrame& frame) {
 void TrainerNode::OnShutdown() {
   if (!loop_) return;
   closing_ = true;
-  const bool stopped =
-      loop_->Stop(std::chrono::milliseconds(static_cast<int64_t>(shutdown_wait_s_ * 1000)));
-  if (!stopped)
-    Log().warn("a training round is still running: abandoning it (published versions stay "
-               "valid; the work dir resumes from the last trainer checkpoint)");
+  // The round stops at its next step boundary and saves checkpoint.pt (TrainingLoop::Stop).
+  const auto t0 = std::chrono::steady_clock::now();
+  if (!loop_->Stop(std::chrono::milliseconds(static_cast<int64_t>(shutdown_wait_s_ * 1000)))) {
+    Log().warn("waiting for the training round to reach a step boundary and save its checkpoint");
+    loop_->Join();
+  }
+  Log().info("training stopped after {:.2f} s at step {} (checkpoint saved; a restart resumes "
+             "there)",
+             std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(),
+             loop_->LastStatus().step());
   if (!loop_->Error().empty()) Log().error("training stopped with an error: {}", loop_->Error());
 }
 

@@ -22,10 +22,6 @@ class TrainerNode : public runtime::Node {
   explicit TrainerNode(const runtime::NodeArgs& args);
   ~TrainerNode() override;
 
-  /// True once the training thread has ended (after shutdown); false means a round was still
-  /// running when OnShutdown gave up waiting: the caller should exit without joining it.
-  bool TrainingStopped() const { return !loop_ || loop_->Finished(); }
-
  protected:
   void OnShutdown() override;
 

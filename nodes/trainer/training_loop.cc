@@ -83,6 +83,12 @@ void TrainingLoop::Start() {
   thread_ = std::thread([this] { Main(); });
 }
 
+void TrainingLoop::Join() {
+  stop_ = true;
+  cv_.notify_all();
+  if (thread_.joinable()) thread_.join();
+}
+
 bool TrainingLoop::Stop(std::chrono::milliseconds wait) {
   stop_ = true;
   cv_.notify_all();
@@ -194,9 +200,19 @@ void TrainingLoop::RunRounds() {
     t.resume = fs::exists(ckpt);
     t.progress = false;
     t.max_val_frames = options_.max_val_frames;
+    // Polled between steps: on Stop() the trainer saves checkpoint.pt at the current step
+    // (atomically) and returns, so shutdown never abandons a round.
+    t.should_stop = [this] { return stop_.load(); };
     const auto t0 = std::chrono::steady_clock::now();
     model::Trainer trainer(options_.config, t);
     const model::TrainReport report = trainer.Run(train, val);
+    if (report.stopped) {
+      // A partial round: its steps are in checkpoint.pt (the next start resumes from there),
+      // but it is not published as a version.
+      std::lock_guard<std::mutex> lock(mutex_);
+      status_.set_step(static_cast<uint64_t>(report.phase1_steps));
+      break;
+    }
     const double seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     if (!know_step) {

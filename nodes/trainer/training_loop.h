@@ -29,9 +29,12 @@ namespace p2i::trainer {
 /// file in versions/ is found); the trainer resumes from work_dir/checkpoint.pt if present, else
 /// from `warm_start` (copied into the work dir first), else from scratch.
 ///
-/// Stop: model::Trainer has no stop hook, so a round cannot be interrupted; Stop() waits up to a
-/// timeout and reports whether the thread ended. Published versions are never touched again, so
-/// abandoning a round (process exit) keeps them valid.
+/// Stop: the loop passes model::TrainerOptions::should_stop (polled between training steps) to
+/// every round, so Stop() interrupts a running round at the next step boundary: the trainer
+/// saves work_dir/checkpoint.pt at that step (atomically) and returns; the partial round is not
+/// published as a version, and the next start resumes from that checkpoint. Only a round's
+/// set-up (dataset preparation, checkpoint load) and one step are not interruptible.
+/// Published versions are never touched again.
 ///
 /// Thread-safety: Start/Stop from one thread; callbacks run on the training thread (the caller
 /// must make them thread-safe, e.g. with locking publishers); LastStatus() is thread-safe.
@@ -55,11 +58,13 @@ class TrainingLoop {
 
   TrainingLoop(const Options& options, ReplayBuffer* buffer, VersionCallback on_version,
                StatusCallback on_status);
-  ~TrainingLoop();  ///< Stop() and join (may block for the rest of a round)
+  ~TrainingLoop();  ///< Stop() and join (at most the rest of one step)
 
   void Start();
-  /// Asks the thread to stop and waits up to `wait`; true when it has ended.
+  /// Asks the thread to stop and waits up to `wait`; true when it has ended (then joined).
   bool Stop(std::chrono::milliseconds wait);
+  /// Asks the thread to stop and waits until it has ended.
+  void Join();
   bool Finished() const { return finished_; }
   /// The error that ended the thread ("" if none).
   std::string Error() const;
