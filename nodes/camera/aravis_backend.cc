@@ -67,23 +67,42 @@ class Device {
  public:
   Device(const std::string& requested, const std::string& role) : role_(role) {
     // The in-process fake camera (tests, docs) is only enabled when asked for by name, so that
-    // "the first device" never means the fake one.
-    if (requested.rfind("Fake", 0) == 0) arv_enable_interface("Fake");
-    arv_update_device_list();
+    // "the first device" never means the fake one; it needs no discovery.
+    const bool fake = requested.rfind("Fake", 0) == 0;
+    if (fake) arv_enable_interface("Fake");
     id_ = requested;
-    if (id_.empty()) {
-      if (arv_get_n_devices() == 0) {
-        throw std::runtime_error(
-            "aravis: no GigE Vision / USB3 Vision camera found (check the cable, the network "
-            "(GigE cameras must be on a subnet of a local interface) and USB permissions; set " +
-            role + ":=ID or IP address to choose one)");
+    std::string open_as = requested;
+    if (!fake) {
+      arv_update_device_list();  // discovery: about 1 s for GigE Vision
+      if (id_.empty()) {
+        if (arv_get_n_devices() == 0) {
+          throw std::runtime_error(
+              "aravis: no GigE Vision / USB3 Vision camera found (check the cable, the network "
+              "(GigE cameras must be on a subnet of a local interface) and USB permissions; "
+              "set " + role + ":=ID or IP address to choose one)");
+        }
+        id_ = open_as = arv_get_device_id(0);
       }
-      id_ = arv_get_device_id(0);
+      // A GigE camera is opened by its IP address: Aravis then streams through the interface
+      // that routes to it. By id it takes the interface whose discovery reply came first, which
+      // on a multi-homed host (e.g. a camera on 127.0.0.1) may be one the stream cannot use.
+      for (unsigned i = 0; i < arv_get_n_devices(); ++i) {
+        const char* id = arv_get_device_id(i);
+        const char* protocol = arv_get_device_protocol(i);
+        const char* address = arv_get_device_address(i);
+        if (id != nullptr && id_ == id && protocol != nullptr &&
+            std::string(protocol) == "GigEVision" && address != nullptr && *address != 0) {
+          open_as = address;
+          break;
+        }
+      }
     }
     GError* error = nullptr;
-    camera_ = arv_camera_new(id_.c_str(), &error);
+    camera_ = arv_camera_new(open_as.c_str(), &error);
     if (camera_ == nullptr) {
-      throw std::runtime_error("aravis: cannot open " + role + " '" + id_ + "': " + Take(&error) +
+      const std::string why = Take(&error);
+      arv_update_device_list();
+      throw std::runtime_error("aravis: cannot open " + role + " '" + id_ + "': " + why +
                                "; devices found: " + DevicesFound());
     }
     const char* model = arv_camera_get_model_name(camera_, nullptr);
