@@ -3,6 +3,11 @@
 /// for several resolutions and the shipped presets, with parameters, FLOPs and the ratio of the
 /// measured time to the time at the machine's measured matmul FLOP rate.
 ///
+/// The matmul rate is measured with the same thread count immediately before and after each
+/// timing it divides (median of kMatmulRuns short 512x512 runs on each side), so a ratio compares
+/// a timing with the machine's speed at that moment (the shared box's load changes within
+/// minutes). The rate used is printed per row and written to the CSV.
+///
 /// usage: model_bench [--threads N] [--out results.csv] [--quick] [--infer-only] [--presets DIR]
 /// (--infer-only skips the training-step timings, reported as 0)
 #include <algorithm>
@@ -26,6 +31,33 @@ struct Row {
   std::string name;
   model::P2iConfig config;
 };
+
+constexpr int kMatmulRuns = 5;  // per side of a timing
+constexpr int kMatmulSide = 512;
+
+// The current matmul FLOP rate on `threads`: median of `runs` single timed runs (each with its
+// own warm-up), appended to `samples`.
+void SampleMatmulRate(int threads, int runs, std::vector<double>* samples) {
+  for (int i = 0; i < runs; ++i)
+    samples->push_back(model::MeasureMatmulFlopRate(kMatmulSide, threads, /*reps=*/1));
+}
+
+double Median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  const size_t n = v.size();
+  return n % 2 == 1 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+// Runs `timed` between two sets of matmul samples; returns the median rate around it.
+template <typename F>
+double RateAround(int threads, F&& timed) {
+  std::vector<double> samples;
+  SampleMatmulRate(threads, kMatmulRuns, &samples);
+  timed();
+  SampleMatmulRate(threads, kMatmulRuns, &samples);
+  return Median(samples);
+}
 
 model::P2iConfig Ladder(int res) {
   model::P2iConfig c;
@@ -66,8 +98,9 @@ int main(int argc, char** argv) {
       return 1;
     }
   }
-  const double flop_rate = model::MeasureMatmulFlopRate(1024, threads);
-  std::printf("matmul 1024x1024 on %d threads: %.1f GFLOP/s\n", threads, flop_rate / 1e9);
+  std::printf("matmul rate: %dx%d on %d threads, median of %d runs before + %d after each "
+              "timing (mm GF/s columns)\n",
+              kMatmulSide, kMatmulSide, threads, kMatmulRuns, kMatmulRuns);
 
   std::vector<Row> rows;
   for (int r : {64, 128, 256}) rows.push_back({"ladder_" + std::to_string(r), Ladder(r)});
@@ -78,10 +111,11 @@ int main(int argc, char** argv) {
   const auto tmp = std::filesystem::temp_directory_path() / "p2i_model_bench.pt";
   std::ofstream csv(out);
   csv << "name,resolution,threads,params,gflops_per_view,p50_ms,p99_ms,views_per_s,"
-         "infer_ratio_to_matmul,train1_ms,train1_ratio,train2_ms,train2_ratio\n";
-  std::printf("%-14s %5s %10s %8s %8s %8s %8s %6s %10s %6s %10s %6s\n", "model", "res", "params",
-              "GFLOP/v", "p50 ms", "p99 ms", "views/s", "ratio", "train1 ms", "ratio", "train2 ms",
-              "ratio");
+         "infer_ratio_to_matmul,infer_matmul_gflops,train1_ms,train1_ratio,train1_matmul_gflops,"
+         "train2_ms,train2_ratio,train2_matmul_gflops\n";
+  std::printf("%-14s %5s %10s %8s %8s %8s %8s %6s %6s %10s %6s %6s %10s %6s %6s\n", "model", "res",
+              "params", "GFLOP/v", "p50 ms", "p99 ms", "views/s", "mmGF/s", "ratio", "train1 ms",
+              "mmGF/s", "ratio", "train2 ms", "mmGF/s", "ratio");
   for (const auto& row : rows) {
     model::WriteUntrainedCheckpoint(row.config, tmp.string());
     model::SynthesizerOptions so;
@@ -91,30 +125,40 @@ int main(int argc, char** argv) {
     for (int i = 0; i < 3; ++i) synth->Render(pose);
     const int n = quick ? 20 : 100;
     std::vector<double> ms;
-    for (int i = 0; i < n; ++i) {
-      const auto t0 = std::chrono::steady_clock::now();
-      synth->Render(pose);
-      ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
-    }
+    const double infer_rate = RateAround(threads, [&] {
+      for (int i = 0; i < n; ++i) {
+        const auto t0 = std::chrono::steady_clock::now();
+        synth->Render(pose);
+        ms.push_back(
+            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+      }
+    });
     std::sort(ms.begin(), ms.end());
     const double p50 = ms[ms.size() / 2], p99 = ms[std::min(ms.size() - 1, ms.size() * 99 / 100)];
     const double flops = synth->FlopsPerView();
-    const double infer_ratio = (p50 / 1e3) / (flops / flop_rate);
+    const double infer_ratio = (p50 / 1e3) / (flops / infer_rate);
     const int steps = quick ? 2 : 5;
-    const double t1 = infer_only ? 0.0 : model::TimeTrainingStep(row.config, 1, steps, threads);
-    const double t1_ratio = t1 / (model::TrainingStepFlops(row.config, 1) / flop_rate);
-    const double t2 = infer_only ? 0.0 : model::TimeTrainingStep(row.config, 2, steps, threads);
+    double t1 = 0.0, t2 = 0.0, rate1 = 0.0, rate2 = 0.0;
+    if (!infer_only) {
+      rate1 = RateAround(threads, [&] { t1 = model::TimeTrainingStep(row.config, 1, steps, threads); });
+      if (model::TrainingStepFlops(row.config, 2) > 0)
+        rate2 = RateAround(threads, [&] { t2 = model::TimeTrainingStep(row.config, 2, steps, threads); });
+    }
+    const double f1 = model::TrainingStepFlops(row.config, 1);
     const double f2 = model::TrainingStepFlops(row.config, 2);
-    const double t2_ratio = f2 > 0 ? t2 / (f2 / flop_rate) : 0.0;
-    std::printf("%-14s %5d %10lld %8.3f %8.2f %8.2f %8.1f %6.1f %10.1f %6.1f %10.1f %6.1f\n",
+    const double t1_ratio = rate1 > 0 ? t1 / (f1 / rate1) : 0.0;
+    const double t2_ratio = rate2 > 0 && f2 > 0 ? t2 / (f2 / rate2) : 0.0;
+    std::printf("%-14s %5d %10lld %8.3f %8.2f %8.2f %8.1f %6.1f %6.2f %10.1f %6.1f %6.2f %10.1f %6.1f %6.2f\n",
                 row.name.c_str(), row.config.resolution,
-                static_cast<long long>(synth->ParameterCount()), flops / 1e9, p50, p99,
-                1e3 / p50, infer_ratio, t1 * 1e3, t1_ratio, t2 * 1e3, t2_ratio);
+                static_cast<long long>(synth->ParameterCount()), flops / 1e9, p50, p99, 1e3 / p50,
+                infer_rate / 1e9, infer_ratio, t1 * 1e3, rate1 / 1e9, t1_ratio, t2 * 1e3,
+                rate2 / 1e9, t2_ratio);
     std::fflush(stdout);
     csv << row.name << "," << row.config.resolution << "," << threads << ","
         << synth->ParameterCount() << "," << flops / 1e9 << "," << p50 << "," << p99 << ","
-        << 1e3 / p50 << "," << infer_ratio << "," << t1 * 1e3 << "," << t1_ratio << ","
-        << t2 * 1e3 << "," << t2_ratio << "\n";
+        << 1e3 / p50 << "," << infer_ratio << "," << infer_rate / 1e9 << "," << t1 * 1e3 << ","
+        << t1_ratio << "," << rate1 / 1e9 << "," << t2 * 1e3 << "," << t2_ratio << ","
+        << rate2 / 1e9 << "\n";
   }
   std::filesystem::remove(tmp);
   std::printf("wrote %s\n", out.c_str());
