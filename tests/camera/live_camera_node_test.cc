@@ -2,6 +2,7 @@
 /// @brief p2i_camera with live backends as a process: aravis against `arv-fake-gv-camera-0.8`
 /// over GigE Vision on 127.0.0.1 with poses matched from a test publisher; libcamera's
 /// start-up error.
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -17,6 +18,7 @@
 #include "nodes/runtime/publisher.h"
 #include "nodes/runtime/raw_publisher.h"
 #include "nodes/runtime/raw_subscriber.h"
+#include "scene/trajectory.h"
 #include "tests/process_util.h"
 #include "tests/runtime/test_util.h"
 #include "tests/test_paths.h"
@@ -166,6 +168,55 @@ TEST_CASE("aravis backend over GigE Vision (arv-fake-gv-camera on 127.0.0.1): fr
 
   CHECK(camera.Terminate() == 0);
   fake.Terminate();
+}
+
+TEST_CASE("aravis (in-process fake) + p2i_pose_source: every frame's pose lies on the published "
+          "trajectory, between two consecutive poses", "[integration]") {
+  ScopedRunDir run_dir;
+  runtime::RawSubscriber rgbd("/rgbd", {});
+  Process camera({Bin("p2i_camera"), "backend:=aravis", "device:=Fake_1", "pixel_format:=Mono8",
+                  "width:=32", "height:=24", "frame_rate:=25", "status_period:=0"});
+  Process poses({Bin("p2i_pose_source"), "trajectory:=orbit", "rate:=30", "status_period:=0"});
+  REQUIRE(camera.pid() > 0);
+  REQUIRE(poses.pid() > 0);
+  std::vector<scene::Pose> seen;
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  while (seen.size() < 8 && std::chrono::steady_clock::now() < deadline) {
+    msgs::WireMessage wire;
+    msgs::pb::Header header;
+    if (!rgbd.Receive(&wire, &header, std::chrono::milliseconds(200))) continue;
+    msgs::RgbdFrame f;
+    std::string error;
+    if (!msgs::Decode(wire, &f, &error)) continue;
+    CHECK(f.rgb.width == 32);
+    CHECK(f.depth.encoding == msgs::pb::DEPTH32F);
+    CHECK(cv::countNonZero(ToMat(f.depth)) == 0);  // no depth device: all invalid
+    REQUIRE(f.meta.has_pose());
+    seen.push_back(FromMsg(f.meta.pose()));
+  }
+  REQUIRE(seen.size() == 8);
+  // pose_source publishes the orbit's poses in order (looping); a frame between two of them
+  // gets their interpolation: translation on the chord, rotation the SLERP at the same alpha.
+  const auto orbit = scene::GenerateOrbit(scene::OrbitOptions());
+  int interior = 0;  // strictly between two published poses (not just the newest pose)
+  for (const scene::Pose& p : seen) {
+    INFO(p);
+    bool on_segment = false;
+    for (size_t k = 0; k < orbit.size() && !on_segment; ++k) {
+      const scene::Pose& a = orbit[k].pose;
+      const scene::Pose& b = orbit[(k + 1) % orbit.size()].pose;
+      const Eigen::Vector3d ab = b.translation() - a.translation();
+      if (ab.squaredNorm() < 1e-12) continue;
+      const double alpha = (p.translation() - a.translation()).dot(ab) / ab.squaredNorm();
+      if (alpha < -1e-9 || alpha > 1.0 + 1e-9) continue;
+      on_segment = scene::Pose::Interpolate(a, b, std::clamp(alpha, 0.0, 1.0)).equals(p, 1e-6);
+      if (on_segment && alpha > 0.02 && alpha < 0.98) ++interior;
+    }
+    CHECK(on_segment);
+  }
+  CHECK(interior >= 4);  // 25 frames/s against 30 poses/s: most stamps fall between poses
+  CHECK(poses.Terminate() == 0);
+  CHECK(camera.Terminate() == 0);
 }
 
 TEST_CASE("aravis backend: a missing device is a start-up error naming it", "[integration]") {
