@@ -92,7 +92,7 @@ inline cv::Mat ToMat(const msgs::Image& img) {
   }
   return cv::Mat(static_cast<int>(img.height), static_cast<int>(img.width), type,
                  const_cast<uint8_t*>(img.data->data()),
-                 img.step == 0 ? cv::Mat::AUTO_STEP : img.step);
+                 img.step == 0 ? static_cast<size_t>(cv::Mat::AUTO_STEP) : img.step);
 }
 
 }  // namespace p2i::nodes
