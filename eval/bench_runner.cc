@@ -4,6 +4,7 @@
 #include <sys/resource.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -578,7 +579,9 @@ int RunBench(const BenchOptions& options) {
   // Charts.
   ChartInputs ci;
   ci.rows = store.rows();
-  ci.settings = c.settings;
+  // Charts show the settings in the paper's order whatever the run order was.
+  for (const char* s : {"a1", "a3", "a10", "a20", "b", "c"})
+    if (std::find(c.settings.begin(), c.settings.end(), s) != c.settings.end()) ci.settings.push_back(s);
   for (const auto& m : c.methods) ci.methods.push_back(m.name);
   for (const auto& s : c.sizes) ci.sizes.push_back(s.name);
   ci.primary_setting = c.auto_size.setting;  // the setting with the ladder and the seeds
