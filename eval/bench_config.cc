@@ -215,7 +215,7 @@ BenchConfig BenchConfig::FromYamlString(const std::string& text, const std::stri
     } else {
       r.CheckKeys(m,
                   {"name", "type", "preset", "config", "steps", "enet_steps", "batch_size", "seeds",
-                   "seed_settings", "k", "fill_holes"},
+                   "seed_settings", "max_train_s", "k", "fill_holes"},
                   "a method");
       spec.name = r.String(r.Require(m, "name", "a method"), "method name");
       spec.type = m["type"] ? r.String(m["type"], "method type") : spec.name;
@@ -228,6 +228,10 @@ BenchConfig BenchConfig::FromYamlString(const std::string& text, const std::stri
         for (const auto& s : m["seeds"]) spec.seeds.push_back(Int(r, s, "method seeds", 0));
       }
       if (m["seed_settings"]) spec.seed_settings = Strings(r, m["seed_settings"], "method seed_settings");
+      if (m["max_train_s"]) {
+        spec.max_train_s = r.Double(m["max_train_s"], "method max_train_s");
+        if (spec.max_train_s < 0) r.Fail(m["max_train_s"], "method max_train_s must be >= 0");
+      }
       if (m["k"]) spec.warp_k = Int(r, m["k"], "method k", 1);
       if (m["fill_holes"]) spec.warp_fill_holes = Bool(r, m["fill_holes"], "method fill_holes");
     }

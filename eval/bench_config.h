@@ -38,6 +38,9 @@ struct MethodSpec {
   int steps = -1;        ///< learned: phase-1 steps (-1 = the preset's)
   int enet_steps = -1;   ///< p2i: phase-2 (ENET) steps (-1 = max(1, steps / 4) or the preset's)
   int batch_size = -1;   ///< learned: batch size (-1 = the preset's)
+  /// learned: wall-time cap of one training run in seconds (0 = none). Training stops at the next
+  /// step boundary (TrainerOptions::should_stop); the row reports the steps actually run.
+  double max_train_s = 0.0;
   std::vector<int> seeds;   ///< learned: overrides the global seeds (e.g. 3 seeds for P2I-NET)
   /// Settings on which all seeds run; elsewhere only the first seed (empty = every setting).
   std::vector<std::string> seed_settings;

@@ -502,6 +502,11 @@ int RunBench(const BenchOptions& options) {
                 to.threads = threads;
                 to.progress = !quiet && isatty(2);
                 to.resume = fs::exists(ckpt);
+                if (m.max_train_s > 0) {
+                  const auto deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                                           std::chrono::duration<double>(m.max_train_s));
+                  to.should_stop = [deadline] { return Clock::now() >= deadline; };
+                }
                 if (!quiet)
                   std::printf("[%zu/%zu] training %s (%s) on %s, %d frames at %dx%d, seed %d: %d + %d steps...\n",
                               done, total, m.name.c_str(), mc.model.c_str(), setting.c_str(),
@@ -520,6 +525,9 @@ int RunBench(const BenchOptions& options) {
                   tr = model::Trainer(mc, to).Run(train, scene::RgbdDataset{train.camera, {}});
                 }
                 row.train_s = Since(t0);
+                if (tr.stopped && !quiet)
+                  std::printf("  stopped by max_train_s = %.0f s after %d + %d steps\n", m.max_train_s,
+                              tr.phase1_steps, tr.phase2_steps);
                 row.train_steps_phase1 = tr.phase1_steps;
                 row.train_steps_phase2 = tr.phase2_steps;
               }
@@ -647,8 +655,11 @@ int RunBench(const BenchOptions& options) {
                          (mc.IsBaseline() || !mc.enet ? std::string("")
                                                       : " + " + std::to_string(mc.steps_phase2) + " ENET steps") +
                          " at batch " + std::to_string(mc.batch_size) +
-                         " (the paper: tens of thousands): learned rows show an under-trained model "
-                         "when the budget is this small.");
+                         " (the paper: tens of thousands)" +
+                         (m.max_train_s > 0 ? ", each run capped at " + Fixed(m.max_train_s, 0) +
+                                                  " s (the steps column shows what ran)"
+                                            : std::string("")) +
+                         ": learned rows show an under-trained model when the budget is this small.");
     }
   scene::WriteFileAtomic(out_dir + "/report.md", RenderReportMarkdown(ri));
   if (!quiet)

@@ -16,7 +16,7 @@ settings: [a1, b]
 period: 10
 methods:
   - nearest
-  - {name: p2i, preset: default, steps: 4, batch_size: 2, seeds: [1, 2, 3]}
+  - {name: p2i, preset: default, steps: 4, batch_size: 2, seeds: [1, 2, 3], max_train_s: 30}
 sizes:
   - {name: tiny, resolution: 32, model: {g_widths: [16, 16, 8, 8]}}
   - {name: small, resolution: 32, model: {g_widths: [32, 32, 16, 8]}}
@@ -43,6 +43,7 @@ TEST_CASE("Bench configs: the shipped ones parse, defaults and overrides apply",
   REQUIRE(c.methods.size() == 2);
   CHECK(c.methods[0].type == "nearest");
   CHECK(c.methods[1].type == "p2i");
+  CHECK(c.methods[1].max_train_s == Approx(30));
   CHECK(c.SeedsOf(c.methods[0]) == std::vector<int>{1});        // deterministic: one seed
   CHECK(c.SeedsOf(c.methods[1]) == std::vector<int>{1, 2, 3});  // per-method seeds
   const auto mc = c.ModelConfig(c.methods[1], c.sizes[1], 2);
