@@ -308,14 +308,26 @@ std::vector<StabilitySample> MakeStabilitySamples(const StabilitySpec& spec,
   return out;
 }
 
+// Per-sample figures are appended to `views_csv` (stability_views.csv: one line per method and
+// perturbed pose) so that outliers behind a mean can be inspected.
 std::vector<StabilityPoint> RunStability(model::ViewSynthesizer& method, const std::string& name,
-                                         const std::vector<StabilitySample>& samples) {
+                                         const std::vector<StabilitySample>& samples,
+                                         const std::string& views_csv) {
   std::map<std::pair<std::string, double>, std::vector<double>> psnr, ssim, dist;
-  for (const auto& s : samples) {
+  const bool header = !fs::exists(views_csv);
+  std::ofstream lines(views_csv, std::ios::app);
+  if (header) lines << "method,kind,offset,sample,psnr_db,nearest_distance,tx,ty,tz,qx,qy,qz,qw\n";
+  for (size_t i = 0; i < samples.size(); ++i) {
+    const auto& s = samples[i];
     model::View v = method.Render(s.pose);
     if (v.rgb.size() != s.gt.rgb.size()) cv::resize(v.rgb, v.rgb, s.gt.rgb.size(), 0, 0, cv::INTER_AREA);
     const auto key = std::make_pair(s.kind, s.offset);
-    psnr[key].push_back(model::Psnr(v.rgb, s.gt.rgb));
+    const double p = model::Psnr(v.rgb, s.gt.rgb);
+    const auto x = s.pose.ToVector7();
+    lines << name << ',' << s.kind << ',' << s.offset << ',' << i << ',' << p << ',' << s.nearest;
+    for (int k = 0; k < 7; ++k) lines << ',' << x[k];
+    lines << '\n';
+    psnr[key].push_back(p);
     ssim[key].push_back(model::Ssim(v.rgb, s.gt.rgb));
     dist[key].push_back(s.nearest);
   }
@@ -401,7 +413,8 @@ int RunBench(const BenchOptions& options) {
 
   ResultsStore store(out_dir, c.Hash());
   if (options.fresh) {
-    for (const char* f : {"results.csv", "results.json", "stability.json", "stability.csv"})
+    for (const char* f :
+         {"results.csv", "results.json", "stability.json", "stability.csv", "stability_views.csv"})
       fs::remove(fs::path(out_dir) / f);
     fs::remove_all(fs::path(out_dir) / "runs");
     fs::remove_all(fs::path(out_dir) / "strips");
@@ -561,7 +574,8 @@ int RunBench(const BenchOptions& options) {
                 stab_samples = MakeStabilitySamples(c.stability, *data->sim, train.camera, train_poses);
                 stab_samples_made = true;
               }
-              const auto pts = RunStability(*synth, m.name, stab_samples);
+              const auto pts = RunStability(*synth, m.name, stab_samples,
+                                            out_dir + "/stability_views.csv");
               stability.insert(stability.end(), pts.begin(), pts.end());
               SaveStability(out_dir, stability);
             }
