@@ -215,7 +215,7 @@ BenchConfig BenchConfig::FromYamlString(const std::string& text, const std::stri
     } else {
       r.CheckKeys(m,
                   {"name", "type", "preset", "config", "steps", "enet_steps", "batch_size", "seeds",
-                   "seed_settings", "max_train_s", "k", "fill_holes"},
+                   "seed_settings", "seed_sizes", "max_train_s", "k", "fill_holes"},
                   "a method");
       spec.name = r.String(r.Require(m, "name", "a method"), "method name");
       spec.type = m["type"] ? r.String(m["type"], "method type") : spec.name;
@@ -228,6 +228,7 @@ BenchConfig BenchConfig::FromYamlString(const std::string& text, const std::stri
         for (const auto& s : m["seeds"]) spec.seeds.push_back(Int(r, s, "method seeds", 0));
       }
       if (m["seed_settings"]) spec.seed_settings = Strings(r, m["seed_settings"], "method seed_settings");
+      if (m["seed_sizes"]) spec.seed_sizes = Strings(r, m["seed_sizes"], "method seed_sizes");
       if (m["max_train_s"]) {
         spec.max_train_s = r.Double(m["max_train_s"], "method max_train_s");
         if (spec.max_train_s < 0) r.Fail(m["max_train_s"], "method max_train_s must be >= 0");
@@ -302,6 +303,11 @@ BenchConfig BenchConfig::FromYamlString(const std::string& text, const std::stri
       if (std::find(c.settings.begin(), c.settings.end(), x) == c.settings.end())
         r.Fail(methods, "method '" + m.name + "' seed_settings names '" + x + "' which is not in settings");
 
+  for (const auto& m : c.methods)
+    for (const auto& x : m.seed_sizes)
+      if (!c.FindSize(x))
+        r.Fail(methods, "method '" + m.name + "' seed_sizes names '" + x + "' which is not in sizes");
+
   // Build every learned model config now: a bad override stops the run at start-up.
   for (const auto& m : c.methods)
     if (m.IsLearned())
@@ -360,7 +366,8 @@ std::vector<int> BenchConfig::RunsOf(const MethodSpec& method, const std::string
     }
   }
   std::vector<int> seeds_here = SeedsOf(method);
-  if (!has(method.seed_settings, setting)) seeds_here.resize(1);
+  if (!has(method.seed_settings, setting) || !has(method.seed_sizes, size.name))
+    seeds_here.resize(1);
   return seeds_here;
 }
 

@@ -44,6 +44,8 @@ struct MethodSpec {
   std::vector<int> seeds;   ///< learned: overrides the global seeds (e.g. 3 seeds for P2I-NET)
   /// Settings on which all seeds run; elsewhere only the first seed (empty = every setting).
   std::vector<std::string> seed_settings;
+  /// Sizes at which all seeds run; elsewhere only the first seed (empty = every size).
+  std::vector<std::string> seed_sizes;
   int warp_k = 4;           ///< warp
   bool warp_fill_holes = true;
   bool IsLearned() const { return type == "p2i" || type == "cnn"; }

@@ -16,7 +16,8 @@ settings: [a1, b]
 period: 10
 methods:
   - nearest
-  - {name: p2i, preset: default, steps: 4, batch_size: 2, seeds: [1, 2, 3], max_train_s: 30}
+  - {name: p2i, preset: default, steps: 4, batch_size: 2, seeds: [1, 2, 3], max_train_s: 30,
+     seed_sizes: [tiny]}
 sizes:
   - {name: tiny, resolution: 32, model: {g_widths: [16, 16, 8, 8]}}
   - {name: small, resolution: 32, model: {g_widths: [32, 32, 16, 8]}}
@@ -46,6 +47,9 @@ TEST_CASE("Bench configs: the shipped ones parse, defaults and overrides apply",
   CHECK(c.methods[1].max_train_s == Approx(30));
   CHECK(c.SeedsOf(c.methods[0]) == std::vector<int>{1});        // deterministic: one seed
   CHECK(c.SeedsOf(c.methods[1]) == std::vector<int>{1, 2, 3});  // per-method seeds
+  CHECK(c.RunsOf(c.methods[1], "b", c.sizes[0]) == std::vector<int>{1, 2, 3});
+  CHECK(c.RunsOf(c.methods[1], "b", c.sizes[1]) == std::vector<int>{1});  // seed_sizes: [tiny]
+  CHECK(c.RunsOf(c.methods[0], "b", c.sizes[1]).empty());  // baseline: once per resolution
   const auto mc = c.ModelConfig(c.methods[1], c.sizes[1], 2);
   CHECK(mc.resolution == 32);
   CHECK(mc.g_widths == std::vector<int>{32, 32, 16, 8});
