@@ -114,7 +114,9 @@ torch::Tensor SelfAttentionImpl::forward(const torch::Tensor& x) {
 }
 
 GeneratorImpl::GeneratorImpl(const P2iConfig& config)
-    : widths_(config.GeneratorWidths()), channels_(config.Channels()) {
+    : widths_(config.GeneratorWidths()),
+      channels_(config.Channels()),
+      pixel_norm_(config.g_norm == "pixel") {
   fc1 = register_module("fc1", torch::nn::Linear(7, config.g_fc_width));
   fc2 = register_module("fc2", torch::nn::Linear(config.g_fc_width, 16 * widths_[0]));
   convs = register_module("convs", torch::nn::ModuleList());
@@ -130,14 +132,18 @@ GeneratorImpl::GeneratorImpl(const P2iConfig& config)
 
 torch::Tensor GeneratorImpl::forward(const torch::Tensor& pose) {
   auto x = torch::relu(fc1->forward(pose));
-  x = torch::relu(fc2->forward(x)).reshape({pose.size(0), widths_[0], 4, 4});
+  // PixelNorm: each pixel's feature vector to unit RMS (per sample; no batch statistics).
+  const auto norm = [this](const torch::Tensor& t) {
+    return pixel_norm_ ? t * torch::rsqrt(t.pow(2).mean(1, /*keepdim=*/true) + 1e-8) : t;
+  };
+  x = norm(torch::relu(fc2->forward(x)).reshape({pose.size(0), widths_[0], 4, 4}));
   for (size_t i = 0; i < convs->size(); ++i) {
     if (i > 0)
       x = torch::nn::functional::interpolate(
           x, torch::nn::functional::InterpolateFuncOptions()
                  .scale_factor(std::vector<double>{2.0, 2.0})
                  .mode(torch::kNearest));
-    x = torch::leaky_relu(convs[i]->as<torch::nn::Conv2d>()->forward(x), 0.2);
+    x = norm(torch::leaky_relu(convs[i]->as<torch::nn::Conv2d>()->forward(x), 0.2));
   }
   return torch::tanh(to_image->forward(x));
 }
@@ -175,10 +181,11 @@ DiscriminatorImpl::DiscriminatorImpl(const P2iConfig& config) {
   }
   last = register_module("last", SNConv2d(cin, config.latent_dim, 3, 1, 1, sn));
   md = register_module("md", SNLinear(config.latent_dim, 1, sn));
-  mp1 = register_module("mp1", SNLinear(7, config.mapping_width, sn));
-  mp2 = register_module("mp2", SNLinear(config.mapping_width, config.latent_dim, sn));
-  ml1 = register_module("ml1", SNLinear(config.latent_dim, config.mapping_width, sn));
-  ml2 = register_module("ml2", SNLinear(config.mapping_width, 7, sn));
+  const bool sn_map = sn && config.sn_mappings;
+  mp1 = register_module("mp1", SNLinear(7, config.mapping_width, sn_map));
+  mp2 = register_module("mp2", SNLinear(config.mapping_width, config.latent_dim, sn_map));
+  ml1 = register_module("ml1", SNLinear(config.latent_dim, config.mapping_width, sn_map));
+  ml2 = register_module("ml2", SNLinear(config.mapping_width, 7, sn_map));
 }
 
 DOutput DiscriminatorImpl::forward(const torch::Tensor& image) {

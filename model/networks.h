@@ -78,6 +78,7 @@ class GeneratorImpl : public torch::nn::Module {
   torch::nn::Conv2d to_image{nullptr};
   std::vector<int> widths_;
   int channels_;
+  bool pixel_norm_;
 };
 TORCH_MODULE(Generator);
 

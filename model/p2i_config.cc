@@ -64,6 +64,8 @@ void P2iConfig::Validate() const {
     fail("widths must be positive (g_fc_width, d_base_width <= d_max_width, latent_dim, "
          "mapping_width, enet_width, attention_max_res) and enet_blocks >= 0");
   if (batch_size < 1) fail("batch_size must be >= 1");
+  if (d_steps < 1) fail("d_steps must be >= 1");
+  if (g_norm != "none" && g_norm != "pixel") fail("g_norm must be none or pixel, got '" + g_norm + "'");
   if (steps_phase1 < 0 || steps_phase2 < 0) fail("steps_phase1/2 must be >= 0");
   if (!(lr_g > 0 && lr_d > 0 && lr_enet > 0)) fail("learning rates must be > 0");
   if (!(beta1 >= 0 && beta1 < 1 && beta2 >= 0 && beta2 < 1)) fail("betas must be in [0, 1)");
@@ -93,6 +95,7 @@ P2iConfig P2iConfig::FromYamlString(const std::string& text, const std::string& 
       {"g_max_width", [&](const YAML::Node& n) { c.g_max_width = n.as<int>(); }},
       {"g_widths", [&](const YAML::Node& n) { c.g_widths = n.as<std::vector<int>>(); }},
       {"g_fc_width", [&](const YAML::Node& n) { c.g_fc_width = n.as<int>(); }},
+      {"g_norm", [&](const YAML::Node& n) { c.g_norm = n.as<std::string>(); }},
       {"d_base_width", [&](const YAML::Node& n) { c.d_base_width = n.as<int>(); }},
       {"d_max_width", [&](const YAML::Node& n) { c.d_max_width = n.as<int>(); }},
       {"latent_dim", [&](const YAML::Node& n) { c.latent_dim = n.as<int>(); }},
@@ -100,6 +103,7 @@ P2iConfig P2iConfig::FromYamlString(const std::string& text, const std::string& 
       {"attention", [&](const YAML::Node& n) { c.attention = n.as<bool>(); }},
       {"attention_max_res", [&](const YAML::Node& n) { c.attention_max_res = n.as<int>(); }},
       {"spectral_norm", [&](const YAML::Node& n) { c.spectral_norm = n.as<bool>(); }},
+      {"sn_mappings", [&](const YAML::Node& n) { c.sn_mappings = n.as<bool>(); }},
       {"enet", [&](const YAML::Node& n) { c.enet = n.as<bool>(); }},
       {"enet_width", [&](const YAML::Node& n) { c.enet_width = n.as<int>(); }},
       {"enet_blocks", [&](const YAML::Node& n) { c.enet_blocks = n.as<int>(); }},
@@ -109,6 +113,7 @@ P2iConfig P2iConfig::FromYamlString(const std::string& text, const std::string& 
       {"k2", [&](const YAML::Node& n) { c.k2 = n.as<double>(); }},
       {"k3", [&](const YAML::Node& n) { c.k3 = n.as<double>(); }},
       {"batch_size", [&](const YAML::Node& n) { c.batch_size = n.as<int>(); }},
+      {"d_steps", [&](const YAML::Node& n) { c.d_steps = n.as<int>(); }},
       {"steps_phase1", [&](const YAML::Node& n) { c.steps_phase1 = n.as<int>(); }},
       {"steps_phase2", [&](const YAML::Node& n) { c.steps_phase2 = n.as<int>(); }},
       {"lr_g", [&](const YAML::Node& n) { c.lr_g = n.as<double>(); }},
@@ -159,6 +164,7 @@ std::string P2iConfig::ToYamlString() const {
   e << YAML::Key << "g_max_width" << YAML::Value << g_max_width;
   e << YAML::Key << "g_widths" << YAML::Value << YAML::Flow << g_widths;
   e << YAML::Key << "g_fc_width" << YAML::Value << g_fc_width;
+  e << YAML::Key << "g_norm" << YAML::Value << g_norm;
   e << YAML::Key << "d_base_width" << YAML::Value << d_base_width;
   e << YAML::Key << "d_max_width" << YAML::Value << d_max_width;
   e << YAML::Key << "latent_dim" << YAML::Value << latent_dim;
@@ -166,6 +172,7 @@ std::string P2iConfig::ToYamlString() const {
   e << YAML::Key << "attention" << YAML::Value << attention;
   e << YAML::Key << "attention_max_res" << YAML::Value << attention_max_res;
   e << YAML::Key << "spectral_norm" << YAML::Value << spectral_norm;
+  e << YAML::Key << "sn_mappings" << YAML::Value << sn_mappings;
   e << YAML::Key << "enet" << YAML::Value << enet;
   e << YAML::Key << "enet_width" << YAML::Value << enet_width;
   e << YAML::Key << "enet_blocks" << YAML::Value << enet_blocks;
@@ -175,6 +182,7 @@ std::string P2iConfig::ToYamlString() const {
   e << YAML::Key << "k2" << YAML::Value << k2;
   e << YAML::Key << "k3" << YAML::Value << k3;
   e << YAML::Key << "batch_size" << YAML::Value << batch_size;
+  e << YAML::Key << "d_steps" << YAML::Value << d_steps;
   e << YAML::Key << "steps_phase1" << YAML::Value << steps_phase1;
   e << YAML::Key << "steps_phase2" << YAML::Value << steps_phase2;
   e << YAML::Key << "lr_g" << YAML::Value << lr_g;

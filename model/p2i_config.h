@@ -30,13 +30,18 @@ struct P2iConfig {
   /// log2(resolution) - 1 entries.
   std::vector<int> g_widths = {256, 256, 128, 64, 32};
   int g_fc_width = 256;          ///< hidden width of the pose MLP before the 4x4 seed
+  /// Feature normalisation in G after every conv (and the 4x4 seed): "none" or "pixel" (each
+  /// pixel's feature vector scaled to unit RMS, ProGAN's PixelNorm: per sample, no batch
+  /// statistics, so batch-1 inference equals training).
+  std::string g_norm = "none";
   int d_base_width = 32;         ///< D's first block width, doubling per block up to d_max_width
   int d_max_width = 512;
   int latent_dim = 1024;         ///< F_l size (the paper's 1024)
   int mapping_width = 256;       ///< hidden width of M_p and M_l
   bool attention = true;         ///< a self-attention block after each D conv block
   int attention_max_res = 32;    ///< attention only on D feature maps up to this side (cost)
-  bool spectral_norm = true;     ///< on every conv/linear of D, M_d, M_p, M_l
+  bool spectral_norm = true;     ///< on every conv/linear of D and M_d (and M_p, M_l: sn_mappings)
+  bool sn_mappings = true;       ///< spectral norm also on M_p and M_l (when spectral_norm)
   bool enet = true;              ///< train (phase 2) and use ENET
   int enet_width = 32;
   int enet_blocks = 3;           ///< residual blocks
@@ -50,6 +55,7 @@ struct P2iConfig {
 
   // --- optimisation ---
   int batch_size = 16;
+  int d_steps = 1;               ///< D updates per G update (each on its own batch)
   int steps_phase1 = 2000;
   int steps_phase2 = 1000;
   double lr_g = 2e-4;

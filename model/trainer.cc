@@ -306,6 +306,23 @@ int Run::PhaseOne(int target) {
       } else {
         auto& g = nets_->g;
         auto& d = nets_->d;
+        // d_steps > 1: extra D steps first, each on its own batch (a pure function of the step
+        // too), with fakes made without autograd.
+        for (int k = 1; k < config_.d_steps; ++k) {
+          const auto idx_k = BatchIndices(100 + k, step, n);
+          const auto y_k = train_.poses.index_select(0, idx_k);
+          torch::Tensor fake_k;
+          {
+            torch::NoGradGuard no_grad;
+            fake_k = g->forward(y_k);
+          }
+          auto dl_k = DiscriminatorLoss(d->forward(train_.images.index_select(0, idx_k)),
+                                        d->forward(fake_k), d->MapPose(y_k), y_k, w);
+          CheckLoss(dl_k.total, "L_D", step);
+          opt_d_->zero_grad();
+          dl_k.total.backward();
+          opt_d_->step();
+        }
         // D step on a detached fake.
         const auto fake = g->forward(y);
         auto mp = d->MapPose(y);

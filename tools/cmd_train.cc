@@ -1,6 +1,7 @@
 /// @file cmd_train.cc
 /// @brief `p2i train CONFIG.yaml --data ... --out DIR`: trains P2I-NET (phase 1, 2 or both) or
 /// the CNN baseline with model::Trainer.
+#include <csignal>
 #include <cstdio>
 #include <string>
 #include <vector>
@@ -17,6 +18,10 @@
 
 namespace p2i::tools {
 namespace {
+
+// Set by SIGINT / SIGTERM: the trainer saves a checkpoint at the current step and returns.
+volatile std::sig_atomic_t g_stop = 0;
+void OnStopSignal(int) { g_stop = 1; }
 
 // Frames rendered by the built-in simulator along a seeded random walk.
 scene::RgbdDataset RenderBuiltin(const std::string& name, int frames, int side, uint32_t seed) {
@@ -54,8 +59,16 @@ int Train(const model::P2iConfig& config, const scene::RgbdDataset& train,
   options.resume = resume;
   options.init_from = init_from;
   options.progress = !quiet;
+  options.should_stop = [] { return g_stop != 0; };
   model::Trainer trainer(config, options);
+  // Ctrl-C / SIGTERM stop between steps with a checkpoint (`--resume` continues exactly).
+  std::signal(SIGINT, OnStopSignal);
+  std::signal(SIGTERM, OnStopSignal);
   const auto report = trainer.Run(train, val);
+  std::signal(SIGINT, SIG_DFL);
+  std::signal(SIGTERM, SIG_DFL);
+  if (report.stopped)
+    std::printf("stopped by signal: checkpoint saved at the current step (continue with --resume)\n");
   std::printf("trained '%s': phase 1 %d steps, phase 2 %d steps, rollbacks %d\n"
               "validation PSNR %.2f dB (mean training image: %.2f dB)\ncheckpoint %s\nlog %s\n",
               config.name.c_str(), report.phase1_steps, report.phase2_steps, report.rollbacks,
@@ -66,7 +79,8 @@ int Train(const model::P2iConfig& config, const scene::RgbdDataset& train,
 
 int RunTrain(const std::vector<std::string>& args) {
   CLI::App app{"Train P2I-NET (phase 1: G+D adversarial, phase 2: ENET) or the CNN baseline.\n"
-               "Writes DIR/checkpoint.pt (atomic) and DIR/train_log.jsonl.",
+               "Writes DIR/checkpoint.pt (atomic) and DIR/train_log.jsonl. Ctrl-C or SIGTERM "
+               "stops between steps with a checkpoint; --resume continues exactly.",
                "p2i train"};
   std::string config_path, data, split_file, out_dir, init_from;
   int phase = 0, steps = -1, threads = 2, frames = 300, holdout_every = 10;

@@ -1,0 +1,67 @@
+/// @file train_cli_stop_test.cc
+/// @brief `p2i train` stopped by SIGTERM mid-run: exits 0 with a checkpoint at the current step
+/// (the Trainer's stop hook), and --resume continues from it.
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <thread>
+
+#include <catch2/catch.hpp>
+#include <torch/torch.h>
+
+#include "model/checkpoint.h"
+#include "tests/model/model_test_util.h"
+#include "tests/process_util.h"
+#include "tests/test_paths.h"
+
+namespace fs = std::filesystem;
+using namespace p2i::model;
+using namespace p2i::model::testing;
+
+namespace {
+
+std::string Slurp(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+}  // namespace
+
+TEST_CASE("p2i train stops on SIGTERM with a checkpoint at the current step", "[integration]") {
+  const auto dir = TempDir("train_stop");
+  const std::string config = dir + "/tiny.yaml";
+  std::ofstream(config) << TinyConfig().ToYamlString();
+  const std::string p2i = p2i::testing::BinDir() + "/p2i";
+  const std::string log = dir + "/run/train_log.jsonl";
+  {
+    p2i::testing::Process train({p2i, "train", config, "--data", "procedural", "--frames", "16",
+                                 "--out", dir + "/run", "--phase", "1", "--steps", "1000000",
+                                 "--threads", "1", "--quiet"});
+    REQUIRE(train.pid() > 0);
+    // Wait until it has trained a few steps (a loss line every 10 steps).
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(50);
+    while (Slurp(log).find("\"step\":10") == std::string::npos &&
+           std::chrono::steady_clock::now() < deadline)
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    REQUIRE(Slurp(log).find("\"step\":10") != std::string::npos);
+    CHECK(train.Terminate() == 0);  // SIGTERM: stop hook, checkpoint, normal exit
+  }
+  const std::string text = Slurp(log);
+  CHECK(text.find("\"event\":\"stopped\"") != std::string::npos);
+  const auto meta = ReadCheckpointMeta(dir + "/run/checkpoint.pt");
+  CHECK(meta.phase1_step >= 10);
+  CHECK(meta.phase1_step < 1000000);
+  // --resume continues from the stopped step.
+  int code = -1;
+  const std::string out = p2i::testing::RunCommand(
+      p2i + " train " + config + " --data procedural --frames 16 --out " + dir + "/run --phase 1 --steps " +
+          std::to_string(meta.phase1_step + 2) + " --threads 1 --quiet --resume 2>&1",
+      &code);
+  INFO(out);
+  CHECK(code == 0);
+  CHECK(ReadCheckpointMeta(dir + "/run/checkpoint.pt").phase1_step == meta.phase1_step + 2);
+  fs::remove_all(dir);
+}
