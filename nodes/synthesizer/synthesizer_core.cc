@@ -2,6 +2,8 @@
 /// @brief SynthesizerCore: request validation, batched rendering, background hot swap.
 #include "nodes/synthesizer/synthesizer_core.h"
 
+#include "scene/trajectory_io.h"
+
 #include <cmath>
 #include <stdexcept>
 #include <utility>
@@ -109,6 +111,7 @@ void SynthesizerCore::LoadNow(const ModelSpec& spec) {
   loaded->spec = spec;
   loaded->synth = loader_(spec);
   if (!loaded->synth) throw std::runtime_error("synthesizer: the loader returned no model");
+  loaded->coverage = CoverageFor(spec);
   {
     std::lock_guard<std::mutex> lock(pending_mutex_);
     newest_requested_ = std::max(newest_requested_, spec.version);
@@ -131,6 +134,25 @@ bool SynthesizerCore::SwapAsync(const ModelSpec& spec) {
   }
   pending_cv_.notify_one();
   return true;
+}
+
+std::shared_ptr<const model::CoverageScorer> SynthesizerCore::CoverageFor(const ModelSpec& spec) {
+  if (spec.poses_path.empty()) return coverage_;
+  try {
+    std::vector<scene::Pose> poses;
+    for (const auto& p : scene::ReadTumTrajectory(spec.poses_path, scene::TumStampOrder::kSort))
+      poses.push_back(p.pose);
+    return std::make_shared<const model::CoverageScorer>(std::move(poses));
+  } catch (const std::exception& e) {
+    {
+      std::lock_guard<std::mutex> lock(pending_mutex_);
+      last_swap_error_ = "model version " + std::to_string(spec.version) +
+                         ": training poses unusable, coverage from the start-up data instead: " +
+                         e.what();
+    }
+    Count("coverage_fallbacks");
+    return coverage_;
+  }
 }
 
 std::string SynthesizerCore::LastSwapError() {
@@ -161,6 +183,7 @@ void SynthesizerCore::LoaderLoop() {
       loaded->spec = spec;
       loaded->synth = loader_(spec);
       if (!loaded->synth) throw std::runtime_error("the loader returned no model");
+      loaded->coverage = CoverageFor(spec);
       if (spec.version > CurrentVersion() || !HasModel()) {
         Install(std::move(loaded));
         Count("swaps");
@@ -232,7 +255,7 @@ void SynthesizerCore::FillMeta(const Loaded& loaded, const msgs::pb::Pose& pose,
                                const Rendered& r, msgs::pb::ViewMeta* meta) const {
   *meta->mutable_pose() = pose;
   meta->set_model_version(loaded.spec.version);
-  meta->set_coverage(coverage_ ? coverage_->Score(FromMsg(pose)) : 0.0);
+  meta->set_coverage(loaded.coverage ? loaded.coverage->Score(FromMsg(pose)) : 0.0);
   meta->set_queue_ms(r.queue_ms);
   meta->set_render_ms(r.render_ms);
   meta->set_method(options_.method);

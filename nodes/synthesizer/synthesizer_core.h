@@ -27,6 +27,9 @@ struct ModelSpec {
   uint64_t version = 0;         ///< 0 = the start-up model (checkpoint parameter)
   std::string checkpoint_path;  ///< learned methods; ignored by nearest/warp
   std::string method;           ///< p2i | cnn | nearest | warp
+  /// TUM file with the poses the model was trained on (ModelVersion.poses_path): the coverage
+  /// score of this model's views is computed against them. "" = the core's start-up coverage.
+  std::string poses_path;
 };
 
 /// Builds a synthesizer for a spec; throws (any std::exception) when it cannot. Runs on the
@@ -111,6 +114,7 @@ class SynthesizerCore {
   struct Loaded {
     ModelSpec spec;
     std::unique_ptr<model::ViewSynthesizer> synth;
+    std::shared_ptr<const model::CoverageScorer> coverage;  ///< null = none (coverage 0)
     std::mutex render_mutex;
   };
   /// One rendered view before encoding.
@@ -123,6 +127,9 @@ class SynthesizerCore {
   std::shared_ptr<Loaded> Current() const;
   void Install(std::shared_ptr<Loaded> loaded);
   void LoaderLoop();
+  /// The coverage of a model: from spec.poses_path when given and readable, else the start-up
+  /// one (counted `coverage_fallbacks`, reason in LastSwapError()). Loader thread / LoadNow.
+  std::shared_ptr<const model::CoverageScorer> CoverageFor(const ModelSpec& spec);
   /// Renders `poses` with one model in chunks of max_batch. Throws on render failure.
   std::vector<Rendered> RenderWith(Loaded* loaded, const std::vector<scene::Pose>& poses,
                                    Clock::time_point receipt);

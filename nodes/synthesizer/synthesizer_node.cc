@@ -88,7 +88,8 @@ SynthesizerNode::SynthesizerNode(const runtime::NodeArgs& args)
   }
   if (learned_) {
     Subscribe<msgs::pb::ModelVersion>("model_version", [this](const msgs::pb::ModelVersion& mv) {
-      ModelSpec spec{mv.version(), mv.checkpoint_path(), core_->options().method};
+      ModelSpec spec{mv.version(), mv.checkpoint_path(), core_->options().method,
+                     mv.poses_path()};
       if (core_->SwapAsync(spec)) {
         Log().info("loading model version {} from {} in the background", mv.version(),
                    mv.checkpoint_path());

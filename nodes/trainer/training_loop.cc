@@ -11,6 +11,7 @@
 
 #include "model/trainer.h"
 #include "scene/capture.h"
+#include "scene/trajectory_io.h"
 
 namespace p2i::trainer {
 
@@ -50,6 +51,14 @@ void TrainingLoop::Options::Validate() const {
   if (!warm_start.empty() && !fs::exists(warm_start))
     throw std::invalid_argument("TrainingLoop: warm-start checkpoint " + warm_start +
                                 " does not exist");
+}
+
+std::string TrainingLoop::PosesPath(const std::string& version_path) {
+  const std::string ext = ".pt";
+  const bool has_ext = version_path.size() >= ext.size() &&
+                       version_path.compare(version_path.size() - ext.size(), ext.size(), ext) == 0;
+  return (has_ext ? version_path.substr(0, version_path.size() - ext.size()) : version_path) +
+         ".poses.txt";
 }
 
 std::string TrainingLoop::VersionPath(const std::string& work_dir, uint64_t version) {
@@ -233,11 +242,19 @@ void TrainingLoop::RunRounds() {
     // Publish: a versioned copy, written atomically, that this loop never rewrites.
     const uint64_t version = version_ + 1;
     const std::string path = VersionPath(options_.work_dir, version);
+    // The poses this model was trained on (the synthesizer's coverage score), then the model.
+    const std::string poses_path = PosesPath(path);
+    std::vector<scene::StampedPose> poses;
+    poses.reserve(train.frames.size());
+    for (const auto& f : train.frames) poses.push_back({f.stamp, f.pose});
+    scene::WriteTumTrajectory(poses_path, poses,
+                              "training poses of model version " + std::to_string(version));
     scene::WriteFileAtomic(path, ReadFile(report.checkpoint_path));
     version_ = version;
     msgs::pb::ModelVersion mv;
     mv.set_version(version);
     mv.set_checkpoint_path(path);
+    mv.set_poses_path(poses_path);
     mv.set_step(static_cast<uint64_t>(step));
     mv.set_method("p2i_net");
     mv.set_val_psnr(report.val_psnr);

@@ -24,7 +24,8 @@ namespace p2i::trainer {
 /// the buffer has at least 2 * val_every_nth frames), runs model::Trainer (phase 1 only: G and
 /// D; ENET is not trained online) with `resume` so weights, optimiser state and RNG carry over,
 /// up to `steps_per_round` more steps, then copies work_dir/checkpoint.pt atomically to
-/// work_dir/versions/model_vNNNNNN.pt and calls `on_version`. A status (`on_status`) is emitted
+/// work_dir/versions/model_vNNNNNN.pt (after writing the round's training poses beside it,
+/// model_vNNNNNN.poses.txt, TUM format, atomically) and calls `on_version`. A status (`on_status`) is emitted
 /// when the phase changes and after each round. Versions continue after a restart (the highest
 /// file in versions/ is found); the trainer resumes from work_dir/checkpoint.pt if present, else
 /// from `warm_start` (copied into the work dir first), else from scratch.
@@ -72,6 +73,9 @@ class TrainingLoop {
   uint64_t LastVersion() const { return version_; }
 
   static std::string VersionPath(const std::string& work_dir, uint64_t version);
+  /// versions/model_vNNNNNN.poses.txt beside a version's checkpoint: the TUM poses of the frames
+  /// that round trained on (ModelVersion.poses_path).
+  static std::string PosesPath(const std::string& version_path);
 
  private:
   void Main();

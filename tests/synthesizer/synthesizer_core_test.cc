@@ -1,9 +1,12 @@
 /// @file synthesizer_core_test.cc
 /// @brief SynthesizerCore and TopicRenderer with a fake ViewSynthesizer: batch replies, model
 /// version per view, coverage, bad requests, hot swap under load, latest-only skipping.
+#include <unistd.h>
+
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <filesystem>
 #include <limits>
 #include <mutex>
 #include <set>
@@ -17,6 +20,7 @@
 #include "nodes/synthesizer/latest_slot.h"
 #include "nodes/synthesizer/synthesizer_core.h"
 #include "nodes/synthesizer/topic_renderer.h"
+#include "scene/trajectory_io.h"
 
 namespace p2i::nodes {
 namespace {
@@ -393,6 +397,50 @@ TEST_CASE("Topic mode under overload renders the newest pose and counts the skip
   std::lock_guard<std::mutex> lock(mutex);
   CHECK(core.Counter("expired") == 1);
   CHECK(published.size() == before);
+}
+
+}  // namespace
+}  // namespace p2i::nodes
+
+namespace p2i::nodes {
+namespace {
+
+TEST_CASE("Each model's views are scored against that model's training poses", "[unit]") {
+  const std::string dir = std::filesystem::temp_directory_path() /
+                          ("p2i_synth_cov_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  // Model 2 was trained around x = 5 (the start-up coverage is the line x = 0 .. 0.9).
+  std::vector<scene::StampedPose> far;
+  for (int i = 0; i < 10; ++i)
+    far.push_back({0.1 * i, scene::Pose(Eigen::Vector3d(5.0 + 0.1 * i, 0.0, 1.0),
+                                        Eigen::Quaterniond::Identity())});
+  scene::WriteTumTrajectory(dir + "/v2.poses.txt", far);
+
+  SynthesizerCore core({}, FakeLoader(), LineCoverage());
+  core.LoadNow({1, "v1", "p2i"});
+  msgs::RenderReplyMsg reply;
+  core.HandleRender(Request({0.3, 5.3}), SynthesizerCore::Clock::now(), &reply);
+  REQUIRE(CheckOneModel(reply) == 1);
+  CHECK(reply.meta.views(0).coverage() == Approx(1.0));
+  CHECK(reply.meta.views(1).coverage() < 0.1);
+
+  REQUIRE(core.SwapAsync({2, "v2", "p2i", dir + "/v2.poses.txt"}));
+  REQUIRE(core.WaitForVersion(2, std::chrono::seconds(10)));
+  core.HandleRender(Request({0.3, 5.3}), SynthesizerCore::Clock::now(), &reply);
+  REQUIRE(CheckOneModel(reply) == 2);
+  CHECK(reply.meta.views(0).coverage() < 0.1);
+  CHECK(reply.meta.views(1).coverage() == Approx(1.0));
+
+  // Unreadable poses: the model still swaps in, scored against the start-up poses, counted.
+  REQUIRE(core.SwapAsync({3, "v3", "p2i", dir + "/missing.poses.txt"}));
+  REQUIRE(core.WaitForVersion(3, std::chrono::seconds(10)));
+  CHECK(core.Counter("coverage_fallbacks") == 1);
+  CHECK(core.LastSwapError().find("missing.poses.txt") != std::string::npos);
+  core.HandleRender(Request({0.3, 5.3}), SynthesizerCore::Clock::now(), &reply);
+  REQUIRE(CheckOneModel(reply) == 3);
+  CHECK(reply.meta.views(0).coverage() == Approx(1.0));
+  CHECK(reply.meta.views(1).coverage() < 0.1);
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace

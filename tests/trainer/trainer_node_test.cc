@@ -16,6 +16,7 @@
 #include "nodes/runtime/node.h"
 #include "nodes/runtime/shutdown.h"
 #include "scene/capture.h"
+#include "scene/trajectory_io.h"
 #include "tests/runtime/test_util.h"
 #include "tests/test_paths.h"
 #include "tests/trainer/trainer_test_util.h"
@@ -80,6 +81,19 @@ TEST_CASE("p2i_trainer: offline data at 32x32 publishes a ModelVersion, SIGTERM 
   CHECK(versions.front().version() >= 1);
   CHECK(versions.front().width() == 32);
   CHECK(std::filesystem::exists(versions.front().checkpoint_path()));
+  // Beside it, the poses it was trained on (for the synthesizer's coverage score): capture
+  // poses, all but the held-out validation frames.
+  REQUIRE(!versions.front().poses_path().empty());
+  const auto trained = scene::ReadTumTrajectory(versions.front().poses_path(),
+                                                scene::TumStampOrder::kSort);
+  CHECK(trained.size() >= 8);
+  CHECK(trained.size() < 16);
+  for (const auto& p : trained) {
+    bool found = false;
+    for (const auto& f : sim.frames)
+      found |= (f.pose.translation() - p.pose.translation()).norm() < 1e-6;
+    CHECK(found);
+  }
 
   kill(pid, SIGTERM);
   // Generous bound: the test must not depend on timing, only on a clean exit.
