@@ -1,0 +1,350 @@
+/// @file pipeline_bench.cc
+/// @brief End-to-end serving benchmark: request-to-view latency (p50/p99) and views/s through
+/// the real p2i_synthesizer process (render service, one pose per request, one client), at
+/// several resolutions, with and without a p2i_trainer process training at the same time.
+/// Prints a table and writes CSV or JSON.
+///
+/// usage: pipeline_bench [OUT.csv|OUT.json] [--sizes 64,128,256] [--requests N] [--warmup N]
+///                       [--trainer off|on|both] [--synth-threads N] [--trainer-threads N]
+///                       [--trainer-data DIR] [--work DIR]
+///
+/// Models: untrained P2I-NETs from the shipped presets (64: demo_64, 128: default, 256:
+/// default_256), made with `p2i train PRESET --data procedural --steps 0 --phase 1` (random
+/// weights; the render cost does not depend on training). The trainer, when on, trains the
+/// demo_64 preset offline on --trainer-data (default: builtin:small_office along the arm sweep,
+/// 120 frames at 160x120, rendered by `p2i render`) in one endless round (threads --trainer-threads), started and warmed up
+/// (training steps logged) before the measurement. Every process runs with its own
+/// P2I_RUN_DIR; the synthesizer is started with topic_mode false, max_batch 1.
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <fcntl.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "msgs/codec.h"
+#include "nodes/camera/msg_convert.h"
+#include "nodes/runtime/service_client.h"
+#include "scene/trajectory.h"
+
+extern char** environ;
+
+namespace {
+
+using namespace p2i;
+using Clock = std::chrono::steady_clock;
+namespace fs = std::filesystem;
+
+struct Row {
+  int size = 0;
+  bool trainer = false;
+  int requests = 0, failures = 0;
+  double views_per_s = 0;
+  double p50_ms = 0, p99_ms = 0, max_ms = 0;
+  double render_p50_ms = 0, queue_p50_ms = 0;  // as reported by the synthesizer
+  double trainer_steps_per_s = 0;              // during the measurement (0 = no trainer)
+  double load1 = 0;                            // 1-minute load average at the end
+};
+
+double Percentile(std::vector<double> v, double p) {  // nearest rank, as the monitor
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  const size_t rank = static_cast<size_t>(std::ceil(p / 100.0 * v.size()));
+  return v[std::max<size_t>(rank, 1) - 1];
+}
+
+double LoadAverage() {
+  std::ifstream in("/proc/loadavg");
+  double l = 0;
+  in >> l;
+  return l;
+}
+
+/// A child process with its own environment additions; SIGTERM + wait on Stop().
+class Child {
+ public:
+  Child(std::vector<std::string> argv, const std::string& run_dir, const std::string& log) {
+    std::vector<std::string> env_store;
+    for (char** e = environ; *e != nullptr; ++e)
+      if (std::strncmp(*e, "P2I_RUN_DIR=", 12) != 0) env_store.emplace_back(*e);
+    env_store.push_back("P2I_RUN_DIR=" + run_dir);
+    std::vector<char*> env, args;
+    for (auto& e : env_store) env.push_back(e.data());
+    env.push_back(nullptr);
+    for (auto& a : argv) args.push_back(a.data());
+    args.push_back(nullptr);
+    posix_spawn_file_actions_t fa;
+    posix_spawn_file_actions_init(&fa);
+    posix_spawn_file_actions_addopen(&fa, 1, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    posix_spawn_file_actions_adddup2(&fa, 1, 2);
+    if (posix_spawn(&pid_, args[0], &fa, nullptr, args.data(), env.data()) != 0) pid_ = -1;
+    posix_spawn_file_actions_destroy(&fa);
+    if (pid_ < 0) throw std::runtime_error("cannot start " + argv[0]);
+  }
+  ~Child() { Stop(); }
+  int Stop() {
+    if (pid_ <= 0) return 0;
+    ::kill(pid_, SIGTERM);
+    int status = 0;
+    ::waitpid(pid_, &status, 0);
+    pid_ = -1;
+    return WIFEXITED(status) ? WEXITSTATUS(status) : -WTERMSIG(status);
+  }
+  bool Running() const { return pid_ > 0 && ::waitpid(pid_, nullptr, WNOHANG) == 0; }
+
+ private:
+  pid_t pid_ = -1;
+};
+
+int Run(const std::string& cmd) {
+  const int rc = std::system(cmd.c_str());
+  return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
+}
+
+int CountLines(const std::string& path, const std::string& needle) {
+  std::ifstream in(path);
+  std::string line;
+  int n = 0;
+  while (std::getline(in, line)) n += line.find(needle) != std::string::npos;
+  return n;
+}
+
+std::string Preset(const std::string& src, int size) {
+  if (size == 64) return src + "/model/presets/demo_64.yaml";
+  if (size == 128) return src + "/model/presets/default.yaml";
+  if (size == 256) return src + "/model/presets/default_256.yaml";
+  throw std::invalid_argument("no preset for size " + std::to_string(size) + " (64, 128, 256)");
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::string out_path, trainer_mode = "both", trainer_data, work;
+  std::vector<int> sizes{64, 128, 256};
+  int requests = 300, warmup = 20, synth_threads = 1, trainer_threads = 1;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    auto next = [&]() -> std::string {
+      if (i + 1 >= argc) {
+        std::fprintf(stderr, "%s needs a value\n", a.c_str());
+        std::exit(2);
+      }
+      return argv[++i];
+    };
+    if (a == "--sizes") {
+      sizes.clear();
+      std::stringstream ss(next());
+      std::string tok;
+      while (std::getline(ss, tok, ',')) sizes.push_back(std::atoi(tok.c_str()));
+    } else if (a == "--requests") {
+      requests = std::atoi(next().c_str());
+    } else if (a == "--warmup") {
+      warmup = std::atoi(next().c_str());
+    } else if (a == "--trainer") {
+      trainer_mode = next();
+    } else if (a == "--synth-threads") {
+      synth_threads = std::atoi(next().c_str());
+    } else if (a == "--trainer-threads") {
+      trainer_threads = std::atoi(next().c_str());
+    } else if (a == "--trainer-data") {
+      trainer_data = next();
+    } else if (a == "--work") {
+      work = next();
+    } else if (a == "-h" || a == "--help" || a[0] == '-') {
+      std::printf(
+          "usage: %s [OUT.csv|OUT.json] [--sizes 64,128,256] [--requests N] [--warmup N]\n"
+          "          [--trainer off|on|both] [--synth-threads N] [--trainer-threads N]\n"
+          "          [--trainer-data DIR] [--work DIR]\n",
+          argv[0]);
+      return a[0] == '-' && a != "-h" && a != "--help" ? 2 : 0;
+    } else {
+      out_path = a;
+    }
+  }
+  if (trainer_mode != "off" && trainer_mode != "on" && trainer_mode != "both") {
+    std::fprintf(stderr, "--trainer must be off, on or both\n");
+    return 2;
+  }
+  const fs::path exe_dir = fs::canonical("/proc/self/exe").parent_path();
+  const std::string bin = exe_dir.string();
+  const std::string src = P2I_SOURCE_DIR;
+  if (work.empty()) work = "/tmp/p2i_pipeline_bench_" + std::to_string(::getpid());
+  fs::create_directories(work);
+
+  // Models (untrained, from the presets).
+  for (int size : sizes) {
+    const std::string dir = work + "/model_" + std::to_string(size);
+    if (fs::exists(dir + "/checkpoint.pt")) continue;
+    const std::string cmd = "'" + bin + "/p2i' train '" + Preset(src, size) +
+                            "' --data procedural --frames 8 --steps 0 --phase 1 --threads 1 "
+                            "--quiet --out '" + dir + "' > '" + dir + ".log' 2>&1";
+    fs::create_directories(dir);
+    if (Run(cmd) != 0) {
+      std::fprintf(stderr, "making the %d model failed: see %s.log\n", size, dir.c_str());
+      return 1;
+    }
+  }
+  // Trainer data.
+  const bool need_trainer = trainer_mode != "off";
+  if (need_trainer && trainer_data.empty()) {
+    trainer_data = work + "/trainer_data";
+    if (!fs::exists(trainer_data)) {
+      const std::string cmd = "'" + bin + "/p2i' render builtin:small_office -t arm_sweep "
+                              "--width 160 --height 120 --max-frames 120 --out '" +
+                              trainer_data + "' > '" + work + "/render.log' 2>&1";
+      if (Run(cmd) != 0) {
+        std::fprintf(stderr, "rendering trainer data failed: see %s/render.log\n", work.c_str());
+        return 1;
+      }
+    }
+    if (fs::exists(trainer_data + "/seq-01")) trainer_data += "/seq-01";
+  }
+
+  const auto sweep = scene::GenerateArmSweep({});
+  std::vector<Row> rows;
+  std::vector<bool> modes;
+  if (trainer_mode != "on") modes.push_back(false);
+  if (trainer_mode != "off") modes.push_back(true);
+  for (bool with_trainer : modes) {
+    std::unique_ptr<Child> trainer;
+    const std::string trainer_run = work + "/run_trainer";
+    const std::string trainer_work = work + "/trainer_work";
+    if (with_trainer) {
+      fs::remove_all(trainer_work);
+      fs::create_directories(trainer_run);
+      trainer = std::make_unique<Child>(
+          std::vector<std::string>{bin + "/p2i_trainer", "dataset:=" + trainer_data,
+                                   "config:=" + src + "/model/presets/demo_64.yaml",
+                                   "work_dir:=" + trainer_work, "publish_every_steps:=1000000",
+                                   "threads:=" + std::to_string(trainer_threads),
+                                   "status_period:=0"},
+          trainer_run, work + "/trainer.log");
+      // Warm up: the trainer is past its set-up and stepping.
+      const auto deadline = Clock::now() + std::chrono::minutes(5);
+      while (Clock::now() < deadline && trainer->Running() &&
+             CountLines(trainer_work + "/train_log.jsonl", "\"loss") < 2)
+        std::this_thread::sleep_for(std::chrono::milliseconds(200));
+      if (!trainer->Running() || CountLines(trainer_work + "/train_log.jsonl", "\"loss") < 2) {
+        std::fprintf(stderr, "the trainer did not start training: see %s/trainer.log\n",
+                     work.c_str());
+        return 1;
+      }
+    }
+    for (int size : sizes) {
+      const std::string run = work + "/run_" + std::to_string(size);
+      fs::create_directories(run);
+      Child synth({bin + "/p2i_synthesizer", "method:=p2i",
+                   "checkpoint:=" + work + "/model_" + std::to_string(size) + "/checkpoint.pt",
+                   "dataset:=builtin:small_office", "width:=" + std::to_string(size),
+                   "height:=" + std::to_string(size),
+                   "threads:=" + std::to_string(synth_threads), "topic_mode:=false",
+                   "max_batch:=1", "status_period:=0"},
+                  run, work + "/synth_" + std::to_string(size) + ".log");
+      runtime::ServiceClientOptions co;
+      co.endpoint = "ipc://" + run + "/service.render.ipc";
+      co.timeout = std::chrono::milliseconds(10000);
+      co.retries = 6;  // the first call waits for the model to load
+      runtime::ServiceClient<msgs::pb::RenderRequest, msgs::RenderReplyMsg> client(
+          "/render", "/pipeline_bench", co);
+      Row row;
+      row.size = size;
+      row.trainer = with_trainer;
+      std::vector<double> latency, render, queue;
+      const int trainer_steps0 =
+          with_trainer ? CountLines(trainer_work + "/train_log.jsonl", "\"loss") : 0;
+      Clock::time_point t0;
+      for (int i = 0; i < warmup + requests; ++i) {
+        if (i == warmup) t0 = Clock::now();
+        msgs::pb::RenderRequest req;
+        nodes::ToMsg(sweep[i % sweep.size()].pose, req.add_poses());
+        msgs::RenderReplyMsg reply;
+        std::string error;
+        const auto s = Clock::now();
+        const bool ok = client.Call(req, &reply, &error) && reply.meta.ok() &&
+                        reply.images.size() == 2 && reply.images[0].width == uint32_t(size);
+        const double ms = std::chrono::duration<double, std::milli>(Clock::now() - s).count();
+        if (!ok) {
+          if (i < warmup) {
+            std::fprintf(stderr, "size %d: %s%s\n", size, error.c_str(),
+                         reply.meta.error().c_str());
+            return 1;
+          }
+          ++row.failures;
+          continue;
+        }
+        if (i < warmup) continue;
+        latency.push_back(ms);
+        render.push_back(reply.meta.views(0).render_ms());
+        queue.push_back(reply.meta.views(0).queue_ms());
+      }
+      const double seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+      if (with_trainer) {
+        row.trainer_steps_per_s =
+            (CountLines(trainer_work + "/train_log.jsonl", "\"loss") - trainer_steps0) / seconds;
+      }
+      synth.Stop();
+      row.requests = requests;
+      row.views_per_s = latency.size() / seconds;
+      row.p50_ms = Percentile(latency, 50);
+      row.p99_ms = Percentile(latency, 99);
+      row.max_ms = Percentile(latency, 100);
+      row.render_p50_ms = Percentile(render, 50);
+      row.queue_p50_ms = Percentile(queue, 50);
+      row.load1 = LoadAverage();
+      rows.push_back(row);
+      std::fprintf(stderr, "size %d, trainer %s: %.1f views/s, p50 %.2f ms, p99 %.2f ms\n", size,
+                   with_trainer ? "on" : "off", row.views_per_s, row.p50_ms, row.p99_ms);
+    }
+    if (trainer) trainer->Stop();
+  }
+
+  std::printf("\n| size | trainer | requests | failures | views/s | p50 ms | p99 ms | max ms | "
+              "render p50 ms | queue p50 ms | trainer steps/s | load1 |\n");
+  std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+  for (const auto& r : rows) {
+    std::printf("| %d | %s | %d | %d | %.1f | %.2f | %.2f | %.2f | %.2f | %.3f | %.2f | %.2f |\n",
+                r.size, r.trainer ? "on" : "off", r.requests, r.failures, r.views_per_s,
+                r.p50_ms, r.p99_ms, r.max_ms, r.render_p50_ms, r.queue_p50_ms,
+                r.trainer_steps_per_s, r.load1);
+  }
+  if (!out_path.empty()) {
+    std::ofstream out(out_path);
+    if (out_path.size() > 5 && out_path.substr(out_path.size() - 5) == ".json") {
+      nlohmann::json j = nlohmann::json::array();
+      for (const auto& r : rows) {
+        j.push_back({{"size", r.size}, {"trainer", r.trainer}, {"requests", r.requests},
+                     {"failures", r.failures}, {"views_per_s", r.views_per_s},
+                     {"p50_ms", r.p50_ms}, {"p99_ms", r.p99_ms}, {"max_ms", r.max_ms},
+                     {"render_p50_ms", r.render_p50_ms}, {"queue_p50_ms", r.queue_p50_ms},
+                     {"trainer_steps_per_s", r.trainer_steps_per_s}, {"load1", r.load1}});
+      }
+      out << j.dump(2) << "\n";
+    } else {
+      out << "size,trainer,requests,failures,views_per_s,p50_ms,p99_ms,max_ms,render_p50_ms,"
+             "queue_p50_ms,trainer_steps_per_s,load1\n";
+      for (const auto& r : rows) {
+        out << r.size << "," << (r.trainer ? "on" : "off") << "," << r.requests << ","
+            << r.failures << "," << r.views_per_s << "," << r.p50_ms << "," << r.p99_ms << ","
+            << r.max_ms << "," << r.render_p50_ms << "," << r.queue_p50_ms << ","
+            << r.trainer_steps_per_s << "," << r.load1 << "\n";
+      }
+    }
+    std::printf("wrote %s\n", out_path.c_str());
+  }
+  return 0;
+}
