@@ -121,7 +121,19 @@ Networks::Networks(const P2iConfig& config, bool with_discriminator) {
   if (!config.IsBaseline()) {
     if (with_discriminator) d = Discriminator(config);
     if (config.enet) e = Enhancer(config);
+    if (config.g_ema > 0) {  // made last: the other modules' initialisation is unchanged
+      g_ema = Generator(config);
+      CopyWeights(*g, *g_ema);
+      for (auto& p : g_ema->parameters()) p.set_requires_grad(false);
+    }
   }
+}
+
+void CopyWeights(torch::nn::Module& from, torch::nn::Module& to) {
+  torch::NoGradGuard no_grad;
+  auto pf = from.named_parameters(), bf = from.named_buffers();
+  for (auto& kv : to.named_parameters()) kv.value().copy_(pf[kv.key()]);
+  for (auto& kv : to.named_buffers()) kv.value().copy_(bf[kv.key()]);
 }
 
 void WriteFileAtomically(const std::string& path,
@@ -145,7 +157,12 @@ void SaveCheckpoint(const std::string& path, const CheckpointMeta& meta, Network
                     const Optimizers& optimizers) {
   torch::serialize::OutputArchive archive;
   archive.write("meta", c10::IValue(meta.ToJson()));
-  SaveModule(archive, "G", nets.g.ptr());
+  if (!meta.inference_only) {
+    SaveModule(archive, "G", nets.g.ptr());
+    if (nets.g_ema) SaveModule(archive, "G_EMA", nets.g_ema.ptr());
+  } else {
+    SaveModule(archive, "G", nets.Serving().ptr());  // the G that renders
+  }
   if (nets.e) SaveModule(archive, "ENET", nets.e.ptr());
   if (!meta.inference_only) {
     if (nets.d) SaveModule(archive, "D", nets.d.ptr());
@@ -197,6 +214,7 @@ CheckpointMeta LoadCheckpoint(const std::string& path, Networks& nets,
   try {
     archive.load_from(path);
     LoadModule(archive, "G", nets.g.ptr(), path);
+    if (nets.g_ema) LoadModule(archive, "G_EMA", nets.g_ema.ptr(), path);
     if (nets.d) LoadModule(archive, "D", nets.d.ptr(), path);
     if (nets.e) LoadModule(archive, "ENET", nets.e.ptr(), path);
     LoadOptimizer(archive, "opt_G", optimizers.g);
@@ -221,7 +239,32 @@ CheckpointMeta LoadWeights(const std::string& path, Networks& nets, bool with_en
   try {
     archive.load_from(path);
     LoadModule(archive, "G", nets.g.ptr(), path);
+    if (nets.g_ema) {
+      torch::serialize::InputArchive sub;
+      if (archive.try_read("G_EMA", sub))
+        nets.g_ema->load(sub);
+      else
+        CopyWeights(*nets.g, *nets.g_ema);
+    }
     if (nets.e && with_enet) LoadModule(archive, "ENET", nets.e.ptr(), path);
+  } catch (const c10::Error& e) {
+    throw std::runtime_error("cannot load checkpoint " + path + ": " + e.what_without_backtrace() +
+                             " (was it written for another config?)");
+  }
+  return meta;
+}
+
+CheckpointMeta LoadServingWeights(const std::string& path, Networks& nets) {
+  CheckpointMeta meta = ReadCheckpointMeta(path);
+  torch::serialize::InputArchive archive;
+  try {
+    archive.load_from(path);
+    torch::serialize::InputArchive sub;
+    if (archive.try_read("G_EMA", sub))
+      nets.g->load(sub);
+    else
+      LoadModule(archive, "G", nets.g.ptr(), path);
+    if (nets.e) LoadModule(archive, "ENET", nets.e.ptr(), path);
   } catch (const c10::Error& e) {
     throw std::runtime_error("cannot load checkpoint " + path + ": " + e.what_without_backtrace() +
                              " (was it written for another config?)");
@@ -231,8 +274,10 @@ CheckpointMeta LoadWeights(const std::string& path, Networks& nets, bool with_en
 
 ExportReport ExportInference(const std::string& in_checkpoint, const std::string& out_path) {
   CheckpointMeta meta = ReadCheckpointMeta(in_checkpoint);
-  Networks nets(meta.config, /*with_discriminator=*/false);
-  LoadWeights(in_checkpoint, nets);
+  P2iConfig plain = meta.config;
+  plain.g_ema = 0.0;  // the exported G is the serving one (the average when there is one)
+  Networks nets(plain, /*with_discriminator=*/false);
+  LoadServingWeights(in_checkpoint, nets);
   meta.inference_only = true;
   SaveCheckpoint(out_path, meta, nets, {});
   ExportReport r;

@@ -46,6 +46,10 @@ struct Networks {
   Generator g{nullptr};
   Discriminator d{nullptr};
   Enhancer e{nullptr};
+  /// The moving average of G (config.g_ema > 0, P2I-NET only), starting as a copy of g.
+  Generator g_ema{nullptr};
+  /// The G that renders: g_ema when present, else g.
+  Generator& Serving() { return g_ema ? g_ema : g; }
 };
 
 /// Optimisers to save/restore with a checkpoint (any may be null).
@@ -75,9 +79,16 @@ CheckpointMeta ReadCheckpointMeta(const std::string& path);
 CheckpointMeta LoadCheckpoint(const std::string& path, Networks& nets,
                               const Optimizers& optimizers, bool restore_rng);
 
-/// Loads only G and ENET (when `nets.e` is set and with_enet) from a full or an inference
-/// checkpoint into networks of the same shape; D, optimisers and the RNG are untouched.
-/// Returns the metadata.
+/// Loads only G (and G_EMA into nets.g_ema when set: from the file's G_EMA, else a copy of G)
+/// and ENET (when `nets.e` is set and with_enet) from a full or an inference checkpoint into
+/// networks of the same shape; D, optimisers and the RNG are untouched. Returns the metadata.
 CheckpointMeta LoadWeights(const std::string& path, Networks& nets, bool with_enet = true);
+
+/// For rendering: loads the G that serves (the file's G_EMA when it has one, else G) into
+/// nets.g, and ENET when nets.e is set.
+CheckpointMeta LoadServingWeights(const std::string& path, Networks& nets);
+
+/// Copies a's parameters and buffers into b (same shape), without autograd.
+void CopyWeights(torch::nn::Module& from, torch::nn::Module& to);
 
 }  // namespace p2i::model

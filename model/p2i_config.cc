@@ -65,6 +65,7 @@ void P2iConfig::Validate() const {
          "mapping_width, enet_width, attention_max_res) and enet_blocks >= 0");
   if (batch_size < 1) fail("batch_size must be >= 1");
   if (d_steps < 1) fail("d_steps must be >= 1");
+  if (!(g_ema >= 0 && g_ema < 1)) fail("g_ema must be in [0, 1) (0 = off)");
   if (g_norm != "none" && g_norm != "pixel") fail("g_norm must be none or pixel, got '" + g_norm + "'");
   if (steps_phase1 < 0 || steps_phase2 < 0) fail("steps_phase1/2 must be >= 0");
   if (!(lr_g > 0 && lr_d > 0 && lr_enet > 0)) fail("learning rates must be > 0");
@@ -114,6 +115,7 @@ P2iConfig P2iConfig::FromYamlString(const std::string& text, const std::string& 
       {"k3", [&](const YAML::Node& n) { c.k3 = n.as<double>(); }},
       {"batch_size", [&](const YAML::Node& n) { c.batch_size = n.as<int>(); }},
       {"d_steps", [&](const YAML::Node& n) { c.d_steps = n.as<int>(); }},
+      {"g_ema", [&](const YAML::Node& n) { c.g_ema = n.as<double>(); }},
       {"steps_phase1", [&](const YAML::Node& n) { c.steps_phase1 = n.as<int>(); }},
       {"steps_phase2", [&](const YAML::Node& n) { c.steps_phase2 = n.as<int>(); }},
       {"lr_g", [&](const YAML::Node& n) { c.lr_g = n.as<double>(); }},
@@ -183,6 +185,7 @@ std::string P2iConfig::ToYamlString() const {
   e << YAML::Key << "k3" << YAML::Value << k3;
   e << YAML::Key << "batch_size" << YAML::Value << batch_size;
   e << YAML::Key << "d_steps" << YAML::Value << d_steps;
+  e << YAML::Key << "g_ema" << YAML::Value << g_ema;
   e << YAML::Key << "steps_phase1" << YAML::Value << steps_phase1;
   e << YAML::Key << "steps_phase2" << YAML::Value << steps_phase2;
   e << YAML::Key << "lr_g" << YAML::Value << lr_g;

@@ -70,8 +70,10 @@ P2iSynthesizer::P2iSynthesizer(const std::string& checkpoint_path,
   impl_->path = checkpoint_path;
   torch::set_num_threads(options.threads);
   impl_->meta = ReadCheckpointMeta(checkpoint_path);
-  impl_->nets = std::make_unique<Networks>(impl_->meta.config, /*with_discriminator=*/false);
-  LoadWeights(checkpoint_path, *impl_->nets);
+  P2iConfig serving = impl_->meta.config;
+  serving.g_ema = 0.0;  // one G: the file's serving one (its moving average when it has one)
+  impl_->nets = std::make_unique<Networks>(serving, /*with_discriminator=*/false);
+  LoadServingWeights(checkpoint_path, *impl_->nets);
   const bool enet_trained = impl_->nets->e && impl_->meta.phase2_step > 0;
   if (options.stage == "g+enet" && !enet_trained)
     throw std::runtime_error("checkpoint " + checkpoint_path +

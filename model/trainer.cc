@@ -143,6 +143,7 @@ class Run {
   void CheckLoss(const torch::Tensor& loss, const char* what, int step);
   int PhaseOne(int target);
   int PhaseTwo(int target);
+  void UpdateEma();
   /// Between steps: true (after saving a checkpoint at the current step) when should_stop says so.
   bool StopNow();
 
@@ -204,6 +205,17 @@ void Run::Rollback(const std::string& why) {
                  why.c_str(), meta_.lr_scale);
 }
 
+void Run::UpdateEma() {
+  torch::NoGradGuard no_grad;
+  // Warm-up (as TensorFlow's ExponentialMovingAverage with num_updates): early on the average
+  // follows G closely instead of dragging the random initialisation along for ~1/(1-decay) steps.
+  const double updates = meta_.phase1_step + 1.0;
+  const double decay = std::min(config_.g_ema, (1.0 + updates) / (10.0 + updates));
+  auto src = nets_->g->named_parameters();
+  for (auto& kv : nets_->g_ema->named_parameters())
+    kv.value().mul_(decay).add_(src[kv.key()], 1.0 - decay);
+}
+
 bool Run::StopNow() {
   if (stopped_) return true;
   if (!options_.should_stop || !options_.should_stop()) return false;
@@ -245,7 +257,7 @@ double Run::Validate(bool use_enet) {
   const int64_t n = val_.poses.size(0);
   for (int64_t i = 0; i < n; i += 16) {
     const int64_t j = std::min(n, i + 16);
-    auto out = nets_->g->forward(val_.poses.slice(0, i, j));
+    auto out = nets_->Serving()->forward(val_.poses.slice(0, i, j));
     if (use_enet) out = nets_->e->forward(out);
     for (int64_t k = i; k < j; ++k) sum += Psnr8(ToRgb8(out[k - i]), val_.rgb[k]);
   }
@@ -341,6 +353,7 @@ int Run::PhaseOne(int target) {
         opt_g_->zero_grad();
         gl.total.backward();
         opt_g_->step();
+        if (nets_->g_ema) UpdateEma();
         const double ld = dl.total.item<double>(), lg = gl.total.item<double>();
         const double mon = std::abs(ld) + std::abs(lg);
         ema_ = ema_ < 0 ? mon : 0.95 * ema_ + 0.05 * mon;
@@ -390,7 +403,7 @@ int Run::PhaseTwo(int target) {
     torch::Tensor generated;
     {
       torch::NoGradGuard no_grad;
-      generated = nets_->g->forward(y);
+      generated = nets_->Serving()->forward(y);  // the G that will render
     }
     json line{{"phase", 2}, {"step", step + 1}};
     std::string losses;
@@ -485,10 +498,10 @@ TrainReport Run::Go(const scene::RgbdDataset& train, const scene::RgbdDataset& v
     const P2iConfig& a = source.config;
     if (a.resolution != config_.resolution || a.Channels() != config_.Channels() ||
         a.model != config_.model || a.GeneratorWidths() != config_.GeneratorWidths() ||
-        a.g_fc_width != config_.g_fc_width)
+        a.g_fc_width != config_.g_fc_width || a.g_norm != config_.g_norm)
       throw std::runtime_error("checkpoint " + path + " was trained with config '" + a.name +
-                               "' of another shape (resolution, channels, model, G widths or "
-                               "g_fc_width differ from '" + config_.name + "')");
+                               "' of another shape (resolution, channels, model, G widths, "
+                               "g_fc_width or g_norm differ from '" + config_.name + "')");
     if (!warm_from.empty() && a.enet && config_.enet &&
         (a.enet_width != config_.enet_width || a.enet_blocks != config_.enet_blocks))
       throw std::runtime_error("checkpoint " + path + " has an ENET of another shape (enet_width, "
