@@ -57,7 +57,7 @@ struct Row {
   double views_per_s = 0;
   double p50_ms = 0, p99_ms = 0, max_ms = 0;
   double render_p50_ms = 0, queue_p50_ms = 0;  // as reported by the synthesizer
-  double trainer_steps_per_s = 0;              // during the measurement (0 = no trainer)
+  double trainer_steps_per_s = 0;              // over all sizes of this mode (0 = no trainer)
   double load1 = 0;                            // 1-minute load average at the end
 };
 
@@ -114,6 +114,33 @@ class Child {
 int Run(const std::string& cmd) {
   const int rc = std::system(cmd.c_str());
   return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
+}
+
+/// The highest "step" logged in a train_log.jsonl (the trainer logs every few steps).
+int LastLoggedStep(const std::string& path) {
+  std::ifstream in(path);
+  std::string line;
+  int step = 0;
+  while (std::getline(in, line)) {
+    const size_t at = line.find("\"step\":");
+    if (at != std::string::npos && line.find("\"loss") != std::string::npos)
+      step = std::max(step, std::atoi(line.c_str() + at + 7));
+  }
+  return step;
+}
+
+/// N from the trainer's "training stopped after X s at step N" log line (-1 if absent).
+int StoppedAtStep(const std::string& log) {
+  std::ifstream in(log);
+  std::string line;
+  int step = -1;
+  while (std::getline(in, line)) {
+    const size_t at = line.find("training stopped after");
+    if (at == std::string::npos) continue;
+    const size_t s = line.find("at step ", at);
+    if (s != std::string::npos) step = std::atoi(line.c_str() + s + 8);
+  }
+  return step;
 }
 
 int CountLines(const std::string& path, const std::string& needle) {
@@ -222,6 +249,8 @@ int main(int argc, char** argv) {
   if (trainer_mode != "off") modes.push_back(true);
   for (bool with_trainer : modes) {
     std::unique_ptr<Child> trainer;
+    Clock::time_point trainer_t0;
+    int trainer_step0 = 0;
     const std::string trainer_run = work + "/run_trainer";
     const std::string trainer_work = work + "/trainer_work";
     if (with_trainer) {
@@ -244,6 +273,8 @@ int main(int argc, char** argv) {
                      work.c_str());
         return 1;
       }
+      trainer_t0 = Clock::now();
+      trainer_step0 = LastLoggedStep(trainer_work + "/train_log.jsonl");
     }
     for (int size : sizes) {
       const std::string run = work + "/run_" + std::to_string(size);
@@ -265,8 +296,6 @@ int main(int argc, char** argv) {
       row.size = size;
       row.trainer = with_trainer;
       std::vector<double> latency, render, queue;
-      const int trainer_steps0 =
-          with_trainer ? CountLines(trainer_work + "/train_log.jsonl", "\"loss") : 0;
       Clock::time_point t0;
       for (int i = 0; i < warmup + requests; ++i) {
         if (i == warmup) t0 = Clock::now();
@@ -293,10 +322,6 @@ int main(int argc, char** argv) {
         queue.push_back(reply.meta.views(0).queue_ms());
       }
       const double seconds = std::chrono::duration<double>(Clock::now() - t0).count();
-      if (with_trainer) {
-        row.trainer_steps_per_s =
-            (CountLines(trainer_work + "/train_log.jsonl", "\"loss") - trainer_steps0) / seconds;
-      }
       synth.Stop();
       row.requests = requests;
       row.views_per_s = latency.size() / seconds;
@@ -310,7 +335,19 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "size %d, trainer %s: %.1f views/s, p50 %.2f ms, p99 %.2f ms\n", size,
                    with_trainer ? "on" : "off", row.views_per_s, row.p50_ms, row.p99_ms);
     }
-    if (trainer) trainer->Stop();
+    if (trainer) {
+      // Steps from the end of the warm-up to the stop, over that time: the trainer's speed
+      // while the synthesizer served (the same figure on every row of this mode).
+      const double seconds =
+          std::chrono::duration<double>(Clock::now() - trainer_t0).count();
+      trainer->Stop();
+      const int end_step = StoppedAtStep(work + "/trainer.log");
+      const double rate = end_step >= 0 ? (end_step - trainer_step0) / seconds : 0.0;
+      for (auto& r : rows)
+        if (r.trainer) r.trainer_steps_per_s = rate;
+      std::fprintf(stderr, "trainer: steps %d -> %d in %.1f s (%.2f steps/s)\n", trainer_step0,
+                   end_step, seconds, rate);
+    }
   }
 
   std::printf("\n| size | trainer | requests | failures | views/s | p50 ms | p99 ms | max ms | "
