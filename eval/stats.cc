@@ -129,13 +129,17 @@ AutoSizeChoice ChooseAutoSize(const std::vector<SizeCandidate>& c, double margin
   const auto& best = c[out.best_index];
   std::string r = "picked '" + pick.name + "' (" + Fmt("%.3g M params, %.3g GFLOP/view, ", pick.params / 1e6, pick.flops / 1e9) +
                   Fmt("%.2f dB PSNR, %.1f views/s)", pick.psnr_db, pick.views_per_s) + ": ";
+  std::string within;
+  for (size_t i = 0; i < c.size(); ++i)
+    if (std::isfinite(c[i].psnr_db) && c[i].psnr_db >= floor_db)
+      within += (within.empty() ? "'" : ", '") + c[i].name + "'";
   if (out.index == out.best_index) {
-    r += "it has the best PSNR of the ladder and no smaller size is within " +
-         Fmt("%.2f dB of it", margin_db);
+    r += "it has the best PSNR of the ladder and is the smallest of the sizes within " +
+         Fmt("%.2f dB of it (", margin_db) + within + ")";
   } else {
     r += "the best is '" + best.name + "' at " + Fmt("%.2f dB", best.psnr_db) + " (" +
          Fmt("%.3g M params", best.params / 1e6) + "); '" + pick.name + "' is " +
-         Fmt("%.2f dB below it, within the %.2f dB margin, and the smallest such size", best.psnr_db - pick.psnr_db, margin_db);
+         Fmt("%.2f dB below it, within the %.2f dB margin, and the smallest of the sizes within it (", best.psnr_db - pick.psnr_db, margin_db) + within + ")";
   }
   std::string smaller;
   for (size_t i = 0; i < c.size(); ++i) {
