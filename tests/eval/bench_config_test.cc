@@ -34,7 +34,7 @@ std::string ErrorOf(const std::string& text) {
 }  // namespace
 
 TEST_CASE("Bench configs: the shipped ones parse, defaults and overrides apply", "[unit]") {
-  for (const char* name : {"tiny", "small_office_128", "large_office_128", "ablation_64"}) {
+  for (const char* name : {"tiny", "small_office_128", "large_office_128", "small_office_128_long", "ablation_64"}) {
     INFO(name);
     const auto c = BenchConfig::FromYamlFile(p2i::testing::SourceDir() + "/bench/configs/" + name + ".yaml");
     CHECK_FALSE(c.methods.empty());
