@@ -29,7 +29,7 @@ struct ModelSpec {
   std::string method;           ///< p2i | cnn | nearest | warp
   /// TUM file with the poses the model was trained on (ModelVersion.poses_path): the coverage
   /// score of this model's views is computed against them. "" = the core's start-up coverage.
-  std::string poses_path;
+  std::string poses_path = "";  // (initializer: {version, path, method} stays warning-free)
 };
 
 /// Builds a synthesizer for a spec; throws (any std::exception) when it cannot. Runs on the

@@ -193,9 +193,10 @@ void TrainingLoop::RunRounds() {
     scene::RgbdDataset train, val;
     train.camera = val.camera = all.camera;
     const size_t n = all.frames.size();
-    const bool hold_out = n >= 2 * static_cast<size_t>(options_.val_every_nth);
+    const size_t every = static_cast<size_t>(options_.val_every_nth);
+    const bool hold_out = n >= 2 * every;
     for (size_t i = 0; i < n; ++i) {
-      if (hold_out && i % options_.val_every_nth == options_.val_every_nth / 2)
+      if (hold_out && i % every == every / 2)
         val.frames.push_back(all.frames[i]);
       else
         train.frames.push_back(all.frames[i]);
