@@ -56,9 +56,10 @@ struct P2iConfig {
   // --- optimisation ---
   int batch_size = 16;
   int d_steps = 1;               ///< D updates per G update (each on its own batch)
-  /// Decay of an exponential moving average of G's weights, updated after every G step
-  /// (0 = off; the decay used at step t is min(g_ema, (1 + t) / (10 + t)), a warm-up). When on, the average is the G that validation, phase 2, export and the
-  /// synthesizer use (the raw G keeps training).
+  /// Decay of an exponential moving average of G's weights, updated after every G step (0 = off;
+  /// the decay used at step t is min(g_ema, (1 + t) / (2 + t)): a running mean until then).
+  /// When on, the average is the G that validation, phase 2, export and the synthesizer use
+  /// (the raw G keeps training).
   double g_ema = 0.0;
   int steps_phase1 = 2000;
   int steps_phase2 = 1000;

@@ -203,8 +203,14 @@ TEST_CASE("the synthesizer renders RGB-D in metres with invalid depth 0", "[unit
 }
 
 // A G that carries no pose information leaves ENET to learn the mean image at best (the
-// floor below); 1 dB above it needs pose-dependent images. Measured: ~20.8 vs 18.7 dB.
+// floor below); 1 dB above it needs pose-dependent images.
 constexpr double kMarginDb = 1.0;
+// Phase 1 alone (G+D, the adversarial path; G's moving average renders): measured +1.1 to +1.5 dB
+// above the mean image at 500-1000 steps with this config (docs/MODEL.md, phase-1 study); the
+// assertion keeps 0.5 dB of it so that another machine's float rounding (a different GAN
+// trajectory) does not fail it. Without g_ema or with the 8/16/32-wide D the same run stays
+// 0.5-1.5 dB BELOW the mean image.
+constexpr double kPhase1MarginDb = 0.5;
 
 TEST_CASE("end to end: P2I-NET beats the mean image on held-out procedural frames", "[slow]") {
   // 96 frames along a loop in the analytic room, every 8th held out (interpolation between
@@ -221,17 +227,18 @@ TEST_CASE("end to end: P2I-NET beats the mean image on held-out procedural frame
   c.g_schedule = "custom";
   c.g_widths = {32, 32, 16, 8};
   c.g_fc_width = 64;
-  c.d_base_width = 8;
-  c.d_max_width = 32;
-  c.latent_dim = 64;
-  c.mapping_width = 32;
+  c.d_base_width = 16;
+  c.d_max_width = 64;
+  c.latent_dim = 128;
+  c.mapping_width = 64;
+  c.g_ema = 0.99;
   c.enet_width = 16;
   c.enet_blocks = 1;
   c.batch_size = 8;
   c.lr_g = c.lr_d = 1e-3;
   c.val_every = 100;
   c.checkpoint_every = 100;
-  c.steps_phase1 = 500;
+  c.steps_phase1 = 800;
   c.steps_phase2 = 300;
   c.Validate();
   const auto dir = TempDir("e2e");
@@ -240,9 +247,16 @@ TEST_CASE("end to end: P2I-NET beats the mean image on held-out procedural frame
   o.threads = 1;
   o.progress = false;
   o.max_val_frames = 12;
+  o.phase = 1;
+  const auto phase1 = Trainer(c, o).Run(train, val);
+  INFO("phase 1 alone: val PSNR " << phase1.val_psnr << " dB, mean image "
+                                  << phase1.mean_image_val_psnr << " dB");
+  CHECK(phase1.phase1_steps == 800);
+  CHECK(phase1.val_psnr > phase1.mean_image_val_psnr + kPhase1MarginDb);
+  o.phase = 2;
   const auto report = Trainer(c, o).Run(train, val);
-  INFO("val PSNR " << report.val_psnr << " dB, mean image " << report.mean_image_val_psnr << " dB");
-  CHECK(report.phase1_steps == 500);
+  INFO("with ENET: val PSNR " << report.val_psnr << " dB, mean image " << report.mean_image_val_psnr
+                              << " dB");
   CHECK(report.phase2_steps == 300);
   CHECK(report.val_psnr > report.mean_image_val_psnr + kMarginDb);
   auto synth = LoadSynthesizer(report.checkpoint_path);
