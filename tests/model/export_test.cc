@@ -155,7 +155,8 @@ TEST_CASE("warm start from an exported checkpoint: G/ENET loaded, D fresh, train
   fs::remove_all(dir);
 }
 
-TEST_CASE("p2i export writes the inference checkpoint and reports the sizes", "[integration]") {
+TEST_CASE("p2i export writes the inference checkpoint, reports sizes and --eval quality",
+          "[integration]") {
   const auto data = MakeProceduralDataset(12, 32);
   const auto dir = TempDir("export_cli");
   const std::string full = TrainTiny(dir, data);
@@ -167,6 +168,19 @@ TEST_CASE("p2i export writes the inference checkpoint and reports the sizes", "[
   CHECK(out.find("MB ->") != std::string::npos);
   REQUIRE(fs::exists(dir + "/models/m.pt"));
   CHECK(ReadCheckpointMeta(dir + "/models/m.pt").inference_only);
+  // --eval: held-out quality of the exported file on a rendered dataset, with baselines.
+  const std::string bin = p2i::testing::BinDir() + "/p2i";
+  p2i::testing::RunCommand(bin + " render builtin:small_office -t adjacent_sweeps --width 40 "
+                           "--height 32 --max-frames 4 --out " + dir + "/data 2>&1", &code);
+  REQUIRE(code == 0);
+  const std::string eval = p2i::testing::RunCommand(
+      bin + " export " + full + " --out " + dir + "/m2.pt --eval " + dir + "/data/seq-02 " +
+          "--eval-train " + dir + "/data/seq-01 2>&1", &code);
+  INFO(eval);
+  CHECK(code == 0);
+  CHECK(eval.find("on 4 frames") != std::string::npos);
+  CHECK(eval.find("SSIM") != std::string::npos);
+  CHECK(eval.find("nearest training frame PSNR") != std::string::npos);
   const std::string bad = p2i::testing::RunCommand(
       p2i::testing::BinDir() + "/p2i export " + dir + "/nope.pt --out " + dir + "/x.pt 2>&1", &code);
   CHECK(code != 0);
