@@ -112,11 +112,10 @@ int RunExport(const std::vector<std::string>& args) {
   const auto parent = std::filesystem::path(out_path).parent_path();
   if (!parent.empty()) std::filesystem::create_directories(parent);
   const model::ExportReport r = model::ExportInference(in_path, out_path);
-  std::printf("exported %s -> %s\n%lld parameters (G%s), phase 1 %d steps, phase 2 %d steps\n"
-              "%.2f MB -> %.2f MB\n",
+  std::printf("exported %s -> %s\n%lld parameters (G and ENET if any), phase 1 %d steps, "
+              "phase 2 %d steps\n%.2f MB -> %.2f MB\n",
               in_path.c_str(), out_path.c_str(), static_cast<long long>(r.parameters),
-              r.phase2_steps > 0 ? " + ENET" : "", r.phase1_steps, r.phase2_steps,
-              r.in_bytes / 1e6, r.out_bytes / 1e6);
+              r.phase1_steps, r.phase2_steps, r.in_bytes / 1e6, r.out_bytes / 1e6);
   std::fflush(stdout);
   if (!eval_dir.empty()) Evaluate(out_path, eval_dir, eval_train_dir, threads);
   return 0;
