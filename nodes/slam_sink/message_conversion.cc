@@ -5,15 +5,12 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "nodes/camera/msg_convert.h"
+
 namespace p2i::slam_sink {
 namespace {
 
-scene::Pose PoseFromMsg(const msgs::pb::Pose& pose) {
-  const auto v = msgs::PoseVector(pose);
-  scene::Vector7d x;
-  for (int i = 0; i < 7; ++i) x(i) = v[i];
-  return scene::Pose::FromVector7(x);
-}
+scene::Pose PoseFromMsg(const msgs::pb::Pose& pose) { return nodes::FromMsg(pose); }
 
 double StampOf(const msgs::pb::Header& h) {
   const int64_t ns = h.capture_stamp_ns() != 0 ? h.capture_stamp_ns() : h.publish_stamp_ns();
@@ -31,24 +28,18 @@ cv::Mat ImageToMat(const msgs::Image& image, bool depth) {
     throw std::invalid_argument("ImageToMat: the image has no data");
   }
   const int rows = static_cast<int>(image.height), cols = static_cast<int>(image.width);
-  auto* bytes = const_cast<uint8_t*>(reinterpret_cast<const uint8_t*>(image.data->data()));
-  const size_t step = image.step == 0 ? static_cast<size_t>(cv::Mat::AUTO_STEP) : image.step;
   if (!depth) {
     if (image.encoding != msgs::pb::RGB8) {
       throw std::invalid_argument(std::string("ImageToMat: colour must be RGB8, got ") +
                                   msgs::EncodingName(image.encoding));
     }
-    return cv::Mat(rows, cols, CV_8UC3, bytes, step).clone();
+    return nodes::ToMat(image).clone();
   }
-  cv::Mat raw;
-  if (image.encoding == msgs::pb::DEPTH32F) {
-    raw = cv::Mat(rows, cols, CV_32FC1, bytes, step);
-  } else if (image.encoding == msgs::pb::DEPTH16U) {
-    raw = cv::Mat(rows, cols, CV_16UC1, bytes, step);
-  } else {
+  if (image.encoding != msgs::pb::DEPTH32F && image.encoding != msgs::pb::DEPTH16U) {
     throw std::invalid_argument(std::string("ImageToMat: depth must be DEPTH32F or DEPTH16U, got ") +
                                 msgs::EncodingName(image.encoding));
   }
+  const cv::Mat raw = nodes::ToMat(image);  // a view: CV_32FC1 or CV_16UC1, raw units
   cv::Mat metres(rows, cols, CV_32FC1);
   for (int r = 0; r < rows; ++r) {
     float* out = metres.ptr<float>(r);
@@ -97,15 +88,8 @@ SinkFrame FrameFromRgbd(const msgs::RgbdFrame& msg, const std::string& topic) {
 }
 
 scene::CameraInfo CameraFromMsg(const msgs::pb::CameraInfo& m) {
-  scene::CameraInfo c;
-  c.camera_name = m.camera_name().empty() ? "camera" : m.camera_name();
-  c.image_width = static_cast<int>(m.width());
-  c.image_height = static_cast<int>(m.height());
-  c.distortion_model = m.distortion_model();
-  c.distortion_coefficients.assign(m.d().begin(), m.d().end());
-  for (int i = 0; i < 9 && i < m.k_size(); ++i) c.camera_matrix[i] = m.k(i);
-  for (int i = 0; i < 9 && i < m.r_size(); ++i) c.rectification_matrix[i] = m.r(i);
-  for (int i = 0; i < 12 && i < m.p_size(); ++i) c.projection_matrix[i] = m.p(i);
+  scene::CameraInfo c = nodes::FromMsg(m);
+  if (c.camera_name.empty()) c.camera_name = "camera";
   return c;
 }
 
