@@ -23,6 +23,51 @@
 
 using namespace p2i;
 
+namespace {
+
+/// Starts p2i_trainer with `args`, stderr into `err_path`; returns the pid.
+pid_t StartTrainer(const std::vector<std::string>& args, const std::string& err_path) {
+  const pid_t pid = fork();
+  if (pid == 0) {
+    const int fd = open(err_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0600);
+    dup2(fd, 2);
+    std::vector<char*> argv;
+    for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+    argv.push_back(nullptr);
+    execv(argv[0], argv.data());
+    _exit(127);
+  }
+  return pid;
+}
+
+/// Waits up to `limit` for `pid` to exit and stores its wait status; a hang guard, not a timing
+/// assertion. False (the child SIGKILLed and reaped) when it did not exit in time.
+bool WaitForExit(pid_t pid, std::chrono::seconds limit, int* status) {
+  const auto deadline = std::chrono::steady_clock::now() + limit;
+  pid_t r = 0;
+  while (std::chrono::steady_clock::now() < deadline && (r = waitpid(pid, status, WNOHANG)) == 0)
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  if (r != 0) return true;
+  kill(pid, SIGKILL);
+  waitpid(pid, status, 0);
+  return false;
+}
+
+std::string ReadText(const std::string& path) {
+  std::ifstream in(path);
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+int CountLines(const std::string& path, const std::string& needle) {
+  std::ifstream in(path);
+  std::string line;
+  int n = 0;
+  while (std::getline(in, line)) n += line.find(needle) != std::string::npos;
+  return n;
+}
+
+}  // namespace
+
 TEST_CASE("p2i_trainer: offline data at 32x32 publishes a ModelVersion, SIGTERM exits 0",
           "[integration]") {
   runtime::Shutdown::ResetForTesting();
@@ -52,16 +97,7 @@ TEST_CASE("p2i_trainer: offline data at 32x32 publishes a ModelVersion, SIGTERM 
       "work_dir:=" + dir + "/work", "publish_every_steps:=4", "min_frames:=4",
       "max_val_frames:=2", "trainer_status_period:=0.2", "latch_period:=0.2"};
   const std::string err_path = dir + "/stderr.txt";
-  const pid_t pid = fork();
-  if (pid == 0) {
-    const int fd = open(err_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0600);
-    dup2(fd, 2);
-    std::vector<char*> argv;
-    for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-    argv.push_back(nullptr);
-    execv(argv[0], argv.data());
-    _exit(127);
-  }
+  const pid_t pid = StartTrainer(args, err_path);
   REQUIRE(pid > 0);
   // A version, and a status that shows the whole capture in the buffer (either may come first).
   const auto got_all = [&] {
@@ -74,9 +110,7 @@ TEST_CASE("p2i_trainer: offline data at 32x32 publishes a ModelVersion, SIGTERM 
   const bool alive = waitpid(pid, &status, WNOHANG) == 0;
   if (!got_all() || !alive) {
     if (alive) kill(pid, SIGKILL), waitpid(pid, &status, 0);
-    std::ifstream in(err_path);
-    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    FAIL("no ModelVersion received; trainer stderr:\n" << text);
+    FAIL("no ModelVersion received; trainer stderr:\n" << ReadText(err_path));
   }
   CHECK(versions.front().version() >= 1);
   CHECK(versions.front().width() == 32);
@@ -97,52 +131,13 @@ TEST_CASE("p2i_trainer: offline data at 32x32 publishes a ModelVersion, SIGTERM 
 
   kill(pid, SIGTERM);
   // Generous bound: the test must not depend on timing, only on a clean exit.
-  const auto stop_deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
-  pid_t r = 0;
-  while (std::chrono::steady_clock::now() < stop_deadline &&
-         (r = waitpid(pid, &status, WNOHANG)) == 0)
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  if (r == 0) {
-    kill(pid, SIGKILL);
-    waitpid(pid, &status, 0);
+  if (!WaitForExit(pid, std::chrono::seconds(20), &status))
     FAIL("p2i_trainer did not exit after SIGTERM");
-  }
   CHECK(WIFEXITED(status));
   CHECK(WEXITSTATUS(status) == 0);
   std::filesystem::remove_all(dir);
 }
 
-namespace {
-
-/// Starts p2i_trainer with `args`, stderr into `err_path`; returns the pid.
-pid_t StartTrainer(const std::vector<std::string>& args, const std::string& err_path) {
-  const pid_t pid = fork();
-  if (pid == 0) {
-    const int fd = open(err_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0600);
-    dup2(fd, 2);
-    std::vector<char*> argv;
-    for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-    argv.push_back(nullptr);
-    execv(argv[0], argv.data());
-    _exit(127);
-  }
-  return pid;
-}
-
-std::string ReadText(const std::string& path) {
-  std::ifstream in(path);
-  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-}
-
-int CountLines(const std::string& path, const std::string& needle) {
-  std::ifstream in(path);
-  std::string line;
-  int n = 0;
-  while (std::getline(in, line)) n += line.find(needle) != std::string::npos;
-  return n;
-}
-
-}  // namespace
 
 TEST_CASE("p2i_trainer: SIGTERM inside a long round stops it at a step boundary with a "
           "checkpoint the next start resumes exactly",
@@ -177,18 +172,11 @@ TEST_CASE("p2i_trainer: SIGTERM inside a long round stops it at a step boundary 
   const auto t0 = std::chrono::steady_clock::now();
   kill(pid, SIGTERM);
   int status = 0;
-  pid_t r = 0;
-  // A hang guard, not a timing assertion.
-  while (std::chrono::steady_clock::now() < t0 + std::chrono::seconds(30) &&
-         (r = waitpid(pid, &status, WNOHANG)) == 0)
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  const bool exited = WaitForExit(pid, std::chrono::seconds(30), &status);
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  if (r == 0) {
-    kill(pid, SIGKILL);
-    waitpid(pid, &status, 0);
+  if (!exited)
     FAIL("p2i_trainer did not exit after SIGTERM:\n" << ReadText(dir + "/stderr1.txt"));
-  }
   const std::string err1 = ReadText(dir + "/stderr1.txt");
   INFO(err1);
   std::fprintf(stderr, "p2i_trainer: SIGTERM mid-round -> exit after %.2f s\n", seconds);
