@@ -4,83 +4,69 @@
 /// starts need (model::ExportInference). With --eval DIR it then renders every frame of a
 /// held-out dataset with the exported file and prints PSNR / SSIM (and, with --eval-train DIR,
 /// the mean-training-image and nearest-training-frame baselines on the same frames).
-#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include <CLI/CLI.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "model/baseline_nearest.h"
 #include "model/metrics.h"
 #include "model/p2i_synthesizer.h"
 #include "model/trainer.h"
 #include "scene/dataset_loader.h"
+#include "scene/image_ops.h"
 #include "tools/command.h"
 
 namespace p2i::tools {
 namespace {
 
-// As the trainer prepares ground truth: centre square crop, INTER_AREA to side x side.
-cv::Mat CropResize(const cv::Mat& in, int side) {
-  const int s = std::min(in.cols, in.rows);
-  cv::Mat out;
-  cv::resize(in(cv::Rect((in.cols - s) / 2, (in.rows - s) / 2, s, s)), out, cv::Size(side, side), 0,
-             0, cv::INTER_AREA);
-  return out;
-}
-
 // RGB PSNR / SSIM of `model` on every frame of `test_dir`; baselines from `train_dir` if given.
+// Ground truth and training frames are prepared as the trainer prepares them (centre square
+// crop, area-resized to the model's side).
 void Evaluate(const std::string& model, const std::string& test_dir, const std::string& train_dir,
               int threads) {
   model::SynthesizerOptions o;
   o.threads = threads;
   auto synth = model::LoadSynthesizer(model, o);
   const int r = synth->Camera().image_width;
-  const scene::RgbdDataset test = scene::OpenDataset(test_dir).LoadAll();
+  const scene::RgbdDataset test =
+      scene::CenterCropResizeDataset(scene::OpenDataset(test_dir).LoadAll(), r, r);
   if (test.frames.empty()) throw std::runtime_error("--eval " + test_dir + " has no frames");
-  scene::RgbdDataset train;
-  std::vector<cv::Mat> train_rgb;
+  std::unique_ptr<model::NearestKeyframe> nearest;
   cv::Mat mean;
   if (!train_dir.empty()) {
-    train = scene::OpenDataset(train_dir).LoadAll();
+    scene::RgbdDataset train =
+        scene::CenterCropResizeDataset(scene::OpenDataset(train_dir).LoadAll(), r, r);
     if (train.frames.empty()) throw std::runtime_error("--eval-train " + train_dir + " has no frames");
     cv::Mat sum = cv::Mat::zeros(r, r, CV_64FC3);
-    for (const auto& f : train.frames) {
-      train_rgb.push_back(CropResize(f.rgb, r));
-      cv::accumulate(train_rgb.back(), sum);
-    }
-    sum.convertTo(mean, CV_8UC3, 1.0 / train_rgb.size());
+    for (const auto& f : train.frames) cv::accumulate(f.rgb, sum);
+    sum.convertTo(mean, CV_8UC3, 1.0 / static_cast<double>(train.frames.size()));
+    model::NearestKeyframeOptions nearest_options;
+    nearest_options.metres_per_degree = 0.5 * M_PI / 180.0;  // 0.5 m per radian of rotation
+    nearest = std::make_unique<model::NearestKeyframe>(std::move(train), nearest_options);
   }
   double psnr = 0, ssim = 0, mean_psnr = 0, mean_ssim = 0, near_psnr = 0, near_ssim = 0;
   for (const auto& f : test.frames) {
-    const cv::Mat gt = CropResize(f.rgb, r);
+    const cv::Mat& gt = f.rgb;
     const cv::Mat view = synth->Render(f.pose).rgb;
     psnr += model::Psnr(view, gt);
     ssim += model::Ssim(view, gt);
-    if (train_rgb.empty()) continue;
+    if (!nearest) continue;
     mean_psnr += model::Psnr(mean, gt);
     mean_ssim += model::Ssim(mean, gt);
-    // Nearest training pose: metres + 0.5 m per radian of rotation.
-    size_t best = 0;
-    double best_d = 1e300;
-    for (size_t k = 0; k < train.frames.size(); ++k) {
-      const auto& q = train.frames[k].pose;
-      const double d = (q.translation() - f.pose.translation()).norm() +
-                       0.5 * q.rotation().angularDistance(f.pose.rotation());
-      if (d < best_d) {
-        best_d = d;
-        best = k;
-      }
-    }
-    near_psnr += model::Psnr(train_rgb[best], gt);
-    near_ssim += model::Ssim(train_rgb[best], gt);
+    const cv::Mat near = nearest->Render(f.pose).rgb;
+    near_psnr += model::Psnr(near, gt);
+    near_ssim += model::Ssim(near, gt);
   }
   const double n = static_cast<double>(test.frames.size());
   std::printf("eval %s (%s) on %zu frames of %s at %dx%d: PSNR %.2f dB, SSIM %.3f\n", model.c_str(),
               synth->Name().c_str(), test.frames.size(), test_dir.c_str(), r, r, psnr / n, ssim / n);
-  if (!train_rgb.empty())
+  if (nearest)
     std::printf("baselines from %s: mean training image PSNR %.2f dB, SSIM %.3f; nearest training "
                 "frame PSNR %.2f dB, SSIM %.3f\n",
                 train_dir.c_str(), mean_psnr / n, mean_ssim / n, near_psnr / n, near_ssim / n);
