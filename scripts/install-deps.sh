@@ -15,6 +15,13 @@ PACKAGES=(
   libspdlog-dev libcli11-dev nlohmann-json3-dev
   libaravis-dev libusb-1.0-0-dev aravis-tools
   gnuplot-nox
+  # optimised BLAS for LibTorch (Debian's libtorch links the generic libblas.so.3; without this
+  # it is the netlib reference BLAS, ~15x slower; the OpenMP build shares LibTorch's libgomp)
+  libopenblas0-openmp
+  libopen3d-dev libboost-dev
+  libwebsocketpp-dev libzstd-dev liblz4-dev
+  python3-zmq python3-protobuf
+  iproute2
 )
 
 missing=()
