@@ -68,9 +68,9 @@ inline float Gaussian4(std::uint64_t bits) {
   return (sum - 2.0f) * 1.7320508f;
 }
 
-}  // namespace
 
-struct SimScene::Compiled {
+/// The scene compiled for the inner loops (floats, per-object corners). Immutable once built.
+struct CompiledScene {
   Vec3f room_min, room_max;
   int face_material[kRoomFaces];
   std::vector<Primitive> prims;
@@ -79,19 +79,15 @@ struct SimScene::Compiled {
   float ambient = 0.3f;
 };
 
-SimScene::SimScene(SimSceneDescription description, SimSensorOptions sensor)
-    : description_(std::move(description)), sensor_(sensor) {
-  description_.Validate();
-  sensor_.Validate();
-  auto c = std::make_shared<Compiled>();
-  c->room_min = description_.RoomMin().cast<float>();
-  c->room_max = description_.RoomMax().cast<float>();
-  for (int i = 0; i < 4; ++i) c->face_material[i] = description_.wall_materials[i];
-  c->face_material[4] = description_.floor_material;
-  c->face_material[5] = description_.ceiling_material;
-  for (const auto& m : description_.materials) c->samplers.emplace_back(m);
-  c->ambient = static_cast<float>(description_.ambient);
-  for (const auto& l : description_.lights) {
+void CompileScene(const SimSceneDescription& description, CompiledScene* c) {
+  c->room_min = description.RoomMin().cast<float>();
+  c->room_max = description.RoomMax().cast<float>();
+  for (int i = 0; i < 4; ++i) c->face_material[i] = description.wall_materials[i];
+  c->face_material[4] = description.floor_material;
+  c->face_material[5] = description.ceiling_material;
+  for (const auto& m : description.materials) c->samplers.emplace_back(m);
+  c->ambient = static_cast<float>(description.ambient);
+  for (const auto& l : description.lights) {
     Light cl;
     cl.directional = l.type == SimLight::Type::kDirectional;
     const Eigen::Vector3d towards =
@@ -101,7 +97,7 @@ SimScene::SimScene(SimSceneDescription description, SimSensorOptions sensor)
     cl.inv_range2 = static_cast<float>(1.0 / (l.range * l.range));
     c->lights.push_back(cl);
   }
-  for (const auto& o : description_.objects) {
+  for (const auto& o : description.objects) {
     Primitive p;
     p.shape = o.shape;
     p.material = o.material;
@@ -132,6 +128,397 @@ SimScene::SimScene(SimSceneDescription description, SimSensorOptions sensor)
     }
     c->prims.push_back(p);
   }
+}
+
+/// The rays of one frame. The ray of pixel (u, v) is d0 + u * du + v * dv: its camera-frame z
+/// is 1, so the ray parameter of a hit is its z-depth.
+struct FrameRays {
+  int w = 0, h = 0;
+  double fx = 0, fy = 0, cx = 0, cy = 0;
+  Eigen::Matrix3d world_to_cam;
+  Eigen::Vector3d origin_d;
+  Vec3f origin, d0, du, dv;
+  Vec3f Row(int v) const { return d0 + static_cast<float>(v) * dv; }
+};
+
+FrameRays MakeFrameRays(const Pose& camera_to_world, const CameraInfo& camera) {
+  FrameRays r;
+  r.w = camera.image_width, r.h = camera.image_height;
+  r.fx = camera.fx(), r.fy = camera.fy(), r.cx = camera.cx(), r.cy = camera.cy();
+  if (r.w <= 0 || r.h <= 0 || !(r.fx > 0.0) || !(r.fy > 0.0) || !std::isfinite(r.cx) ||
+      !std::isfinite(r.cy)) {
+    throw std::invalid_argument("SimScene::Render: camera '" + camera.camera_name +
+                                "' needs a positive image size and focal lengths (got " +
+                                std::to_string(r.w) + "x" + std::to_string(r.h) + ", fx " +
+                                std::to_string(r.fx) + ", fy " + std::to_string(r.fy) + ")");
+  }
+  const Eigen::Matrix3d rot_d = camera_to_world.rotation().toRotationMatrix();
+  r.world_to_cam = rot_d.transpose();
+  r.origin_d = camera_to_world.translation();
+  const Eigen::Matrix3f rot = rot_d.cast<float>();
+  r.origin = r.origin_d.cast<float>();
+  r.d0 = rot * Vec3f(static_cast<float>(-r.cx / r.fx), static_cast<float>(-r.cy / r.fy), 1.0f);
+  r.du = rot.col(0) / static_cast<float>(r.fx);
+  r.dv = rot.col(1) / static_cast<float>(r.fy);
+  return r;
+}
+
+/// Nearest hit per pixel: z-depth (inf = none) and primitive id (-1 = none).
+struct ZBuffer {
+  std::vector<float> z;
+  std::vector<std::int16_t> ids;
+  explicit ZBuffer(std::size_t n) : z(n, std::numeric_limits<float>::infinity()), ids(n, -1) {}
+};
+
+/// The room: the exit point of each ray from the room's box (faces 0..5 = -x, +x, -y, +y, -z, +z).
+void RasterRoom(const CompiledScene& sc, const FrameRays& r, ZBuffer* zb) {
+  for (int v = 0; v < r.h; ++v) {
+    const Vec3f row = r.Row(v);
+    for (int u = 0; u < r.w; ++u) {
+      const Vec3f d = row + static_cast<float>(u) * r.du;
+      float t_best = std::numeric_limits<float>::infinity();
+      int face = -1;
+      for (int a = 0; a < 3; ++a) {
+        if (d[a] > 1e-12f) {
+          const float t = (sc.room_max[a] - r.origin[a]) / d[a];
+          if (t < t_best) t_best = t, face = 2 * a + 1;
+        } else if (d[a] < -1e-12f) {
+          const float t = (sc.room_min[a] - r.origin[a]) / d[a];
+          if (t < t_best) t_best = t, face = 2 * a;
+        }
+      }
+      if (face >= 0 && t_best > kNear) {
+        const std::size_t i = static_cast<std::size_t>(v) * r.w + u;
+        zb->z[i] = t_best;
+        zb->ids[i] = static_cast<std::int16_t>(face);
+      }
+    }
+  }
+}
+
+struct PixelRect {
+  int u0 = 0, u1 = -1, v0 = 0, v1 = -1;
+  bool Empty() const { return u0 > u1 || v0 > v1; }
+};
+
+/// The pixels covered by a primitive's bounding box clipped at the near plane (one pixel of
+/// margin), or an empty rectangle when it is entirely behind the camera or off screen.
+PixelRect ProjectedBounds(const Primitive& p, const FrameRays& r) {
+  static constexpr int kEdges[12][2] = {{0, 1}, {2, 3}, {4, 5}, {6, 7}, {0, 2}, {1, 3},
+                                        {4, 6}, {5, 7}, {0, 4}, {1, 5}, {2, 6}, {3, 7}};
+  Eigen::Vector3d pc[8];
+  for (int i = 0; i < 8; ++i) pc[i] = r.world_to_cam * (p.corners[i] - r.origin_d);
+  double umin = 1e30, umax = -1e30, vmin = 1e30, vmax = -1e30;
+  bool any = false;
+  const auto add = [&](const Eigen::Vector3d& q) {
+    const double uu = r.fx * q.x() / q.z() + r.cx, vv = r.fy * q.y() / q.z() + r.cy;
+    umin = std::min(umin, uu), umax = std::max(umax, uu);
+    vmin = std::min(vmin, vv), vmax = std::max(vmax, vv);
+    any = true;
+  };
+  const double near = kNear;
+  for (int i = 0; i < 8; ++i) {
+    if (pc[i].z() >= near) add(pc[i]);
+  }
+  for (const auto& e : kEdges) {
+    const Eigen::Vector3d& a = pc[e[0]];
+    const Eigen::Vector3d& b = pc[e[1]];
+    if ((a.z() < near) != (b.z() < near)) {
+      const double s = (near - a.z()) / (b.z() - a.z());
+      add(a + s * (b - a));
+    }
+  }
+  PixelRect rect;
+  if (!any) return rect;
+  rect.u0 = std::max(0, static_cast<int>(std::floor(umin)) - 1);
+  rect.u1 = std::min(r.w - 1, static_cast<int>(std::ceil(umax)) + 1);
+  rect.v0 = std::max(0, static_cast<int>(std::floor(vmin)) - 1);
+  rect.v1 = std::min(r.h - 1, static_cast<int>(std::ceil(vmax)) + 1);
+  return rect;
+}
+
+// Ray tests in the primitive's local frame: origin o, direction d (camera z = 1 per unit t).
+// Each returns the first hit's t beyond kNear from outside, or -1. A ray starting inside the
+// solid hits nothing (its faces are culled).
+
+inline float IntersectBox(const Primitive& p, const Vec3f& o, const Vec3f& d) {
+  float tmin = -std::numeric_limits<float>::infinity();
+  float tmax = std::numeric_limits<float>::infinity();
+  for (int a = 0; a < 3; ++a) {
+    const float inv = 1.0f / d[a];  // +-inf for d[a] == 0 works with the slab test
+    float t1 = (-p.half[a] - o[a]) * inv, t2 = (p.half[a] - o[a]) * inv;
+    if (t1 > t2) std::swap(t1, t2);
+    tmin = std::max(tmin, t1);
+    tmax = std::min(tmax, t2);
+  }
+  return tmin <= tmax && tmin > kNear ? tmin : -1.0f;  // from inside: culled (back faces)
+}
+
+inline float IntersectCylinder(const Primitive& p, const Vec3f& o, const Vec3f& d) {
+  const float a = d.x() * d.x() + d.y() * d.y();
+  const float b = o.x() * d.x() + o.y() * d.y();
+  const float c = o.x() * o.x() + o.y() * o.y() - p.radius * p.radius;
+  float best = std::numeric_limits<float>::infinity();
+  if (a > 1e-12f) {
+    const float disc = b * b - a * c;
+    if (disc >= 0.0f) {
+      const float ts = (-b - std::sqrt(disc)) / a;
+      const float z = o.z() + ts * d.z();
+      if (ts > kNear && std::abs(z) <= p.half.z()) best = ts;
+    }
+  }
+  if (std::abs(d.z()) > 1e-12f) {
+    // Only the cap facing the camera can be the first hit from outside.
+    const float cap = o.z() > 0.0f ? p.half.z() : -p.half.z();
+    if (std::abs(o.z()) > p.half.z()) {
+      const float tc = (cap - o.z()) / d.z();
+      const float x = o.x() + tc * d.x(), y = o.y() + tc * d.y();
+      if (tc > kNear && x * x + y * y <= p.radius * p.radius) best = std::min(best, tc);
+    }
+  }
+  // From inside the circle the side root is behind the camera, so `best` is a cap or nothing;
+  // from inside the solid nothing is hit (culled).
+  return best < std::numeric_limits<float>::infinity() ? best : -1.0f;
+}
+
+inline float IntersectSphere(const Primitive& p, const Vec3f& o, const Vec3f& d) {
+  const float a = d.squaredNorm();
+  const float b = o.dot(d);
+  const float c = o.squaredNorm() - p.radius * p.radius;
+  const float disc = b * b - a * c;
+  if (c > 0.0f && disc >= 0.0f) {
+    const float ts = (-b - std::sqrt(disc)) / a;
+    if (ts > kNear) return ts;
+  }
+  return -1.0f;
+}
+
+/// Exact ray tests of one primitive over `rect`, keeping the nearer hit per pixel.
+template <typename Intersect>
+void RasterPixels(const Primitive& p, std::int16_t id, const FrameRays& r, const PixelRect& rect,
+                  Intersect intersect, ZBuffer* zb) {
+  const Vec3f o = ToLocal(p, r.origin - p.center);
+  const Vec3f ld0 = ToLocal(p, r.d0), ldu = ToLocal(p, r.du), ldv = ToLocal(p, r.dv);
+  for (int v = rect.v0; v <= rect.v1; ++v) {
+    const Vec3f row = ld0 + static_cast<float>(v) * ldv;
+    float* zrow = &zb->z[static_cast<std::size_t>(v) * r.w];
+    std::int16_t* irow = &zb->ids[static_cast<std::size_t>(v) * r.w];
+    for (int u = rect.u0; u <= rect.u1; ++u) {
+      const float t = intersect(p, o, row + static_cast<float>(u) * ldu);
+      if (t > 0.0f && t < zrow[u]) {
+        zrow[u] = t;
+        irow[u] = id;
+      }
+    }
+  }
+}
+
+/// Objects: exact ray tests inside each one's clipped, projected bounding box.
+void RasterObjects(const CompiledScene& sc, const FrameRays& r, ZBuffer* zb) {
+  for (std::size_t pi = 0; pi < sc.prims.size(); ++pi) {
+    const Primitive& p = sc.prims[pi];
+    const PixelRect rect = ProjectedBounds(p, r);
+    if (rect.Empty()) continue;
+    const auto id = static_cast<std::int16_t>(kRoomFaces + pi);
+    switch (p.shape) {
+      case SimShape::kBox:
+        RasterPixels(p, id, r, rect, IntersectBox, zb);
+        break;
+      case SimShape::kCylinder:
+        RasterPixels(p, id, r, rect, IntersectCylinder, zb);
+        break;
+      case SimShape::kSphere:
+        RasterPixels(p, id, r, rect, IntersectSphere, zb);
+        break;
+    }
+  }
+}
+
+/// What shading needs to know about a visible point: its world normal (towards the outside of
+/// objects, into the room for its faces), texture coordinates in metres and material.
+struct SurfacePoint {
+  Vec3f normal = Vec3f::UnitZ();
+  float su = 0.0f, sv = 0.0f;
+  int material = 0;
+};
+
+SurfacePoint RoomSurfaceAt(const CompiledScene& sc, int face, const Vec3f& hit) {
+  SurfacePoint s;
+  const int axis = face / 2;
+  s.normal = Vec3f::Zero();
+  s.normal[axis] = (face & 1) ? -1.0f : 1.0f;  // inward
+  s.material = sc.face_material[face];
+  if (axis == 0) {
+    s.su = hit.y() - sc.room_min.y(), s.sv = hit.z();
+  } else if (axis == 1) {
+    s.su = hit.x() - sc.room_min.x(), s.sv = hit.z();
+  } else {
+    s.su = hit.x() - sc.room_min.x(), s.sv = hit.y() - sc.room_min.y();
+  }
+  return s;
+}
+
+SurfacePoint ObjectSurfaceAt(const Primitive& p, const Vec3f& hit) {
+  SurfacePoint s;
+  s.material = p.material;
+  const Vec3f l = ToLocal(p, hit - p.center);
+  switch (p.shape) {
+    case SimShape::kBox: {
+      const Vec3f r = l.cwiseAbs().cwiseQuotient(p.half);
+      int a = 0;
+      if (r.y() > r[a]) a = 1;
+      if (r.z() > r[a]) a = 2;
+      Vec3f ln = Vec3f::Zero();
+      ln[a] = l[a] > 0.0f ? 1.0f : -1.0f;
+      s.normal = ToWorld(p, ln);
+      const int b = a == 0 ? 1 : 0, c = a == 2 ? 1 : 2;
+      s.su = l[b] + p.half[b], s.sv = l[c] + p.half[c];
+      break;
+    }
+    case SimShape::kCylinder:
+      if (std::abs(std::abs(l.z()) - p.half.z()) < 1e-3f &&
+          l.x() * l.x() + l.y() * l.y() < p.radius * p.radius * 0.998f) {
+        s.normal = Vec3f(0.0f, 0.0f, l.z() > 0.0f ? 1.0f : -1.0f);
+        s.su = l.x(), s.sv = l.y();
+      } else {
+        s.normal = Vec3f(l.x(), l.y(), 0.0f) / p.radius;
+        s.su = std::atan2(l.y(), l.x()) * p.radius, s.sv = l.z() + p.half.z();
+      }
+      break;
+    case SimShape::kSphere:
+      s.normal = l / p.radius;
+      s.su = std::atan2(s.normal.y(), s.normal.x()) * p.radius;
+      s.sv = std::asin(std::clamp(s.normal.z(), -1.0f, 1.0f)) * p.radius;
+      break;
+  }
+  return s;
+}
+
+/// Ambient plus Lambertian light arriving at `hit` with `normal` (no shadows).
+Vec3f Irradiance(const CompiledScene& sc, const Vec3f& normal, const Vec3f& hit) {
+  Vec3f light = Vec3f::Constant(sc.ambient);
+  for (const Light& lt : sc.lights) {
+    if (lt.directional) {
+      const float ndl = normal.dot(lt.position_or_direction);
+      if (ndl > 0.0f) light += ndl * lt.color;
+    } else {
+      const Vec3f to = lt.position_or_direction - hit;
+      const float dist2 = to.squaredNorm();
+      const float ndl = normal.dot(to) / std::sqrt(dist2);
+      if (ndl > 0.0f) light += (ndl / (1.0f + dist2 * lt.inv_range2)) * lt.color;
+    }
+  }
+  return light;
+}
+
+inline std::uint8_t To8Bit(float c) {
+  return static_cast<std::uint8_t>(c < 0.0f ? 0.0f : (c > 255.0f ? 255.0f : c));
+}
+
+/// Deferred shading: every visible pixel is shaded exactly once; empty pixels are black with
+/// depth 0. With `incidence_cos` non-null it receives |cos| of each hit's incidence angle.
+void Shade(const CompiledScene& sc, const FrameRays& r, const ZBuffer& zb, RgbdSample* out,
+           std::vector<float>* incidence_cos) {
+  out->rgb.create(r.h, r.w, CV_8UC3);
+  out->depth.create(r.h, r.w, CV_32FC1);
+  for (int v = 0; v < r.h; ++v) {
+    std::uint8_t* rgb_row = out->rgb.ptr<std::uint8_t>(v);
+    float* depth_row = out->depth.ptr<float>(v);
+    const Vec3f row = r.Row(v);
+    for (int u = 0; u < r.w; ++u) {
+      const std::size_t i = static_cast<std::size_t>(v) * r.w + u;
+      const int id = zb.ids[i];
+      if (id < 0) {
+        rgb_row[3 * u] = rgb_row[3 * u + 1] = rgb_row[3 * u + 2] = 0;
+        depth_row[u] = 0.0f;
+        continue;
+      }
+      const float t = zb.z[i];
+      const Vec3f d = row + static_cast<float>(u) * r.du;
+      const Vec3f hit = r.origin + t * d;
+      const SurfacePoint s = id < kRoomFaces ? RoomSurfaceAt(sc, id, hit)
+                                             : ObjectSurfaceAt(sc.prims[id - kRoomFaces], hit);
+      float albedo[3];
+      sc.samplers[s.material].Sample(s.su, s.sv, albedo);
+      const Vec3f light = Irradiance(sc, s.normal, hit);
+      for (int k = 0; k < 3; ++k) rgb_row[3 * u + k] = To8Bit(albedo[k] * light[k] * 255.0f + 0.5f);
+      depth_row[u] = t;
+      if (incidence_cos) (*incidence_cos)[i] = std::abs(s.normal.dot(d)) / d.norm();
+    }
+  }
+}
+
+/// The key of a frame's noise: a hash of the options' seed, the stamp (when given), the exact
+/// pose and the image size. The same inputs give the same noise, different poses independent
+/// noise.
+std::uint64_t NoiseKey(std::uint32_t seed, const Pose& camera_to_world, int w, int h, double stamp,
+                       bool stamped) {
+  std::uint64_t key = Mix64(seed + 0x1234567ull);
+  if (stamped) {
+    std::uint64_t bits;
+    std::memcpy(&bits, &stamp, sizeof bits);
+    key = Mix64(key ^ bits ^ 0x5851f42d4c957f2dull);
+  }
+  const Vector7d v7 = camera_to_world.ToVector7();
+  for (int k = 0; k < 7; ++k) {
+    std::uint64_t bits;
+    std::memcpy(&bits, &v7[k], sizeof bits);
+    key = Mix64(key ^ bits);
+  }
+  return Mix64(key ^ (static_cast<std::uint64_t>(w) << 32 | static_cast<std::uint64_t>(h)));
+}
+
+/// Depth range, grazing-angle holes, dropout, depth noise and RGB noise, in place.
+void ApplySensorNoise(const SimSensorOptions& sensor, std::uint64_t key,
+                      const std::vector<float>& incidence_cos, RgbdSample* out) {
+  const float cos_graze = sensor.grazing_angle_deg > 0.0
+                              ? static_cast<float>(std::cos(sensor.grazing_angle_deg * M_PI / 180.0))
+                              : -1.0f;
+  const auto rgb_sigma = static_cast<float>(sensor.rgb_noise_sigma);
+  const auto dropout = static_cast<float>(sensor.depth_dropout);
+  const int w = out->depth.cols, h = out->depth.rows;
+  for (int v = 0; v < h; ++v) {
+    float* depth_row = out->depth.ptr<float>(v);
+    std::uint8_t* rgb_row = out->rgb.ptr<std::uint8_t>(v);
+    for (int u = 0; u < w; ++u) {
+      const std::size_t i = static_cast<std::size_t>(v) * w + u;
+      // Counter-based randomness: two 64-bit hashes per pixel, no generator state, the same
+      // numbers on every platform and standard library.
+      const std::uint64_t r1 = Mix64(key + 2 * i), r2 = Mix64(key + 2 * i + 1);
+      float z = depth_row[u];
+      if (z > 0.0f) {
+        if ((sensor.max_range > 0.0 && z > sensor.max_range) ||
+            (sensor.min_range > 0.0 && z < sensor.min_range) || incidence_cos[i] < cos_graze) {
+          z = 0.0f;
+        } else if (dropout > 0.0f && Uniform16(r2 >> 48) < dropout) {
+          z = 0.0f;
+        } else if (sensor.depth_noise_sigma > 0.0 || sensor.depth_noise_quadratic > 0.0) {
+          const float sigma =
+              static_cast<float>(sensor.depth_noise_sigma + sensor.depth_noise_quadratic * z * z);
+          z = std::max(0.0f, z + sigma * Gaussian4(r1));
+        }
+        depth_row[u] = z;
+      }
+      if (rgb_sigma > 0.0f) {
+        for (int k = 0; k < 3; ++k) {
+          const float noise = rgb_sigma * Gaussian4(Mix64(r2 + 0x9e3779b97f4a7c15ull * (k + 1)));
+          rgb_row[3 * u + k] = To8Bit(rgb_row[3 * u + k] + noise + 0.5f);
+        }
+      }
+    }
+  }
+}
+
+}  // namespace
+
+struct SimScene::Compiled : CompiledScene {};
+
+SimScene::SimScene(SimSceneDescription description, SimSensorOptions sensor)
+    : description_(std::move(description)), sensor_(sensor) {
+  description_.Validate();
+  sensor_.Validate();
+  auto c = std::make_shared<Compiled>();
+  CompileScene(description_, c.get());
   compiled_ = std::move(c);
 }
 
@@ -211,308 +598,22 @@ RgbdSample SimScene::Render(const Pose& camera_to_world, const CameraInfo& camer
 
 RgbdSample SimScene::RenderImpl(const Pose& camera_to_world, const CameraInfo& camera, double stamp,
                                 bool stamped) const {
-  const int w = camera.image_width, h = camera.image_height;
-  const double fx = camera.fx(), fy = camera.fy(), cx = camera.cx(), cy = camera.cy();
-  if (w <= 0 || h <= 0 || !(fx > 0.0) || !(fy > 0.0) || !std::isfinite(cx) || !std::isfinite(cy)) {
-    throw std::invalid_argument("SimScene::Render: camera '" + camera.camera_name +
-                                "' needs a positive image size and focal lengths (got " +
-                                std::to_string(w) + "x" + std::to_string(h) + ", fx " +
-                                std::to_string(fx) + ", fy " + std::to_string(fy) + ")");
-  }
+  const FrameRays rays = MakeFrameRays(camera_to_world, camera);
   const Compiled& sc = *compiled_;
-  const Eigen::Matrix3d rot_d = camera_to_world.rotation().toRotationMatrix();
-  const Eigen::Vector3d origin_d = camera_to_world.translation();
-  const Eigen::Matrix3f rot = rot_d.cast<float>();
-  const Vec3f origin = origin_d.cast<float>();
-  // The ray of pixel (u, v) is d0 + u * du + v * dv: its camera-frame z is 1, so the ray
-  // parameter of a hit is its z-depth.
-  const Vec3f d0 = rot * Vec3f(static_cast<float>(-cx / fx), static_cast<float>(-cy / fy), 1.0f);
-  const Vec3f du = rot.col(0) / static_cast<float>(fx);
-  const Vec3f dv = rot.col(1) / static_cast<float>(fy);
+  ZBuffer zbuf(static_cast<std::size_t>(rays.w) * rays.h);
+  RasterRoom(sc, rays, &zbuf);
+  RasterObjects(sc, rays, &zbuf);
 
-  const std::size_t n = static_cast<std::size_t>(w) * h;
-  std::vector<float> zbuf(n, std::numeric_limits<float>::infinity());
-  std::vector<std::int16_t> ids(n, -1);
-
-  // Room: the exit point of the ray from the room's box.
-  for (int v = 0; v < h; ++v) {
-    const Vec3f row = d0 + static_cast<float>(v) * dv;
-    for (int u = 0; u < w; ++u) {
-      const Vec3f d = row + static_cast<float>(u) * du;
-      float t_best = std::numeric_limits<float>::infinity();
-      int face = -1;
-      for (int a = 0; a < 3; ++a) {
-        if (d[a] > 1e-12f) {
-          const float t = (sc.room_max[a] - origin[a]) / d[a];
-          if (t < t_best) t_best = t, face = 2 * a + 1;
-        } else if (d[a] < -1e-12f) {
-          const float t = (sc.room_min[a] - origin[a]) / d[a];
-          if (t < t_best) t_best = t, face = 2 * a;
-        }
-      }
-      if (face >= 0 && t_best > kNear) {
-        const std::size_t i = static_cast<std::size_t>(v) * w + u;
-        zbuf[i] = t_best;
-        ids[i] = static_cast<std::int16_t>(face);
-      }
-    }
-  }
-
-  // Objects: exact ray tests inside each one's clipped, projected bounding box.
-  static constexpr int kEdges[12][2] = {{0, 1}, {2, 3}, {4, 5}, {6, 7}, {0, 2}, {1, 3},
-                                        {4, 6}, {5, 7}, {0, 4}, {1, 5}, {2, 6}, {3, 7}};
-  const Eigen::Matrix3d world_to_cam = rot_d.transpose();
-  for (std::size_t pi = 0; pi < sc.prims.size(); ++pi) {
-    const Primitive& p = sc.prims[pi];
-    Eigen::Vector3d pc[8];
-    for (int i = 0; i < 8; ++i) pc[i] = world_to_cam * (p.corners[i] - origin_d);
-    double umin = 1e30, umax = -1e30, vmin = 1e30, vmax = -1e30;
-    bool any = false;
-    const auto add = [&](const Eigen::Vector3d& q) {
-      const double uu = fx * q.x() / q.z() + cx, vv = fy * q.y() / q.z() + cy;
-      umin = std::min(umin, uu), umax = std::max(umax, uu);
-      vmin = std::min(vmin, vv), vmax = std::max(vmax, vv);
-      any = true;
-    };
-    const double near = kNear;
-    for (int i = 0; i < 8; ++i) {
-      if (pc[i].z() >= near) add(pc[i]);
-    }
-    for (const auto& e : kEdges) {
-      const Eigen::Vector3d& a = pc[e[0]];
-      const Eigen::Vector3d& b = pc[e[1]];
-      if ((a.z() < near) != (b.z() < near)) {
-        const double s = (near - a.z()) / (b.z() - a.z());
-        add(a + s * (b - a));
-      }
-    }
-    if (!any) continue;
-    const int u0 = std::max(0, static_cast<int>(std::floor(umin)) - 1);
-    const int u1 = std::min(w - 1, static_cast<int>(std::ceil(umax)) + 1);
-    const int v0 = std::max(0, static_cast<int>(std::floor(vmin)) - 1);
-    const int v1 = std::min(h - 1, static_cast<int>(std::ceil(vmax)) + 1);
-    if (u0 > u1 || v0 > v1) continue;
-
-    const auto id = static_cast<std::int16_t>(kRoomFaces + pi);
-    const Vec3f o = ToLocal(p, origin - p.center);
-    const Vec3f ld0 = ToLocal(p, d0), ldu = ToLocal(p, du), ldv = ToLocal(p, dv);
-    for (int v = v0; v <= v1; ++v) {
-      const Vec3f row = ld0 + static_cast<float>(v) * ldv;
-      float* zrow = &zbuf[static_cast<std::size_t>(v) * w];
-      std::int16_t* irow = &ids[static_cast<std::size_t>(v) * w];
-      for (int u = u0; u <= u1; ++u) {
-        const Vec3f d = row + static_cast<float>(u) * ldu;
-        float t = -1.0f;
-        switch (p.shape) {
-          case SimShape::kBox: {
-            float tmin = -std::numeric_limits<float>::infinity();
-            float tmax = std::numeric_limits<float>::infinity();
-            for (int a = 0; a < 3; ++a) {
-              const float inv = 1.0f / d[a];  // +-inf for d[a] == 0 works with the slab test
-              float t1 = (-p.half[a] - o[a]) * inv, t2 = (p.half[a] - o[a]) * inv;
-              if (t1 > t2) std::swap(t1, t2);
-              tmin = std::max(tmin, t1);
-              tmax = std::min(tmax, t2);
-            }
-            if (tmin <= tmax && tmin > kNear) t = tmin;  // from inside: culled (back faces)
-            break;
-          }
-          case SimShape::kCylinder: {
-            const float a = d.x() * d.x() + d.y() * d.y();
-            const float b = o.x() * d.x() + o.y() * d.y();
-            const float c = o.x() * o.x() + o.y() * o.y() - p.radius * p.radius;
-            float best = std::numeric_limits<float>::infinity();
-            if (a > 1e-12f) {
-              const float disc = b * b - a * c;
-              if (disc >= 0.0f) {
-                const float ts = (-b - std::sqrt(disc)) / a;
-                const float z = o.z() + ts * d.z();
-                if (ts > kNear && std::abs(z) <= p.half.z()) best = ts;
-              }
-            }
-            if (std::abs(d.z()) > 1e-12f) {
-              // Only the cap facing the camera can be the first hit from outside.
-              const float cap = o.z() > 0.0f ? p.half.z() : -p.half.z();
-              if (std::abs(o.z()) > p.half.z()) {
-                const float tc = (cap - o.z()) / d.z();
-                const float x = o.x() + tc * d.x(), y = o.y() + tc * d.y();
-                if (tc > kNear && x * x + y * y <= p.radius * p.radius) best = std::min(best, tc);
-              }
-            }
-            // From inside the circle the side root is behind the camera, so `best` is a
-            // cap or nothing; from inside the solid nothing is hit (culled).
-            if (best < std::numeric_limits<float>::infinity()) t = best;
-            break;
-          }
-          case SimShape::kSphere: {
-            const float a = d.squaredNorm();
-            const float b = o.dot(d);
-            const float c = o.squaredNorm() - p.radius * p.radius;
-            const float disc = b * b - a * c;
-            if (c > 0.0f && disc >= 0.0f) {
-              const float ts = (-b - std::sqrt(disc)) / a;
-              if (ts > kNear) t = ts;
-            }
-            break;
-          }
-        }
-        if (t > 0.0f && t < zrow[u]) {
-          zrow[u] = t;
-          irow[u] = id;
-        }
-      }
-    }
-  }
-
-  // Deferred shading: every visible pixel is shaded exactly once.
   RgbdSample out;
   out.pose = camera_to_world;
   out.stamp = stamp;
-  out.rgb.create(h, w, CV_8UC3);
-  out.depth.create(h, w, CV_32FC1);
   const bool effects = sensor_.AnyEnabled();
-  std::vector<float> incidence_cos(effects ? n : 0, 1.0f);
-  for (int v = 0; v < h; ++v) {
-    std::uint8_t* rgb_row = out.rgb.ptr<std::uint8_t>(v);
-    float* depth_row = out.depth.ptr<float>(v);
-    const Vec3f row = d0 + static_cast<float>(v) * dv;
-    for (int u = 0; u < w; ++u) {
-      const std::size_t i = static_cast<std::size_t>(v) * w + u;
-      const int id = ids[i];
-      if (id < 0) {
-        rgb_row[3 * u] = rgb_row[3 * u + 1] = rgb_row[3 * u + 2] = 0;
-        depth_row[u] = 0.0f;
-        continue;
-      }
-      const float t = zbuf[i];
-      const Vec3f d = row + static_cast<float>(u) * du;
-      const Vec3f hit = origin + t * d;
-      Vec3f normal;
-      float su = 0.0f, sv = 0.0f;
-      int material = 0;
-      if (id < kRoomFaces) {
-        const int axis = id / 2;
-        normal = Vec3f::Zero();
-        normal[axis] = (id & 1) ? -1.0f : 1.0f;  // inward
-        material = sc.face_material[id];
-        if (axis == 0) {
-          su = hit.y() - sc.room_min.y(), sv = hit.z();
-        } else if (axis == 1) {
-          su = hit.x() - sc.room_min.x(), sv = hit.z();
-        } else {
-          su = hit.x() - sc.room_min.x(), sv = hit.y() - sc.room_min.y();
-        }
-      } else {
-        const Primitive& p = sc.prims[id - kRoomFaces];
-        material = p.material;
-        const Vec3f l = ToLocal(p, hit - p.center);
-        switch (p.shape) {
-          case SimShape::kBox: {
-            const Vec3f r = l.cwiseAbs().cwiseQuotient(p.half);
-            int a = 0;
-            if (r.y() > r[a]) a = 1;
-            if (r.z() > r[a]) a = 2;
-            Vec3f ln = Vec3f::Zero();
-            ln[a] = l[a] > 0.0f ? 1.0f : -1.0f;
-            normal = ToWorld(p, ln);
-            const int b = a == 0 ? 1 : 0, c = a == 2 ? 1 : 2;
-            su = l[b] + p.half[b], sv = l[c] + p.half[c];
-            break;
-          }
-          case SimShape::kCylinder:
-            if (std::abs(std::abs(l.z()) - p.half.z()) < 1e-3f &&
-                l.x() * l.x() + l.y() * l.y() < p.radius * p.radius * 0.998f) {
-              normal = Vec3f(0.0f, 0.0f, l.z() > 0.0f ? 1.0f : -1.0f);
-              su = l.x(), sv = l.y();
-            } else {
-              normal = Vec3f(l.x(), l.y(), 0.0f) / p.radius;
-              su = std::atan2(l.y(), l.x()) * p.radius, sv = l.z() + p.half.z();
-            }
-            break;
-          case SimShape::kSphere:
-            normal = l / p.radius;
-            su = std::atan2(normal.y(), normal.x()) * p.radius;
-            sv = std::asin(std::clamp(normal.z(), -1.0f, 1.0f)) * p.radius;
-            break;
-        }
-      }
-      float albedo[3];
-      sc.samplers[material].Sample(su, sv, albedo);
-      Vec3f light = Vec3f::Constant(sc.ambient);
-      for (const Light& lt : sc.lights) {
-        if (lt.directional) {
-          const float ndl = normal.dot(lt.position_or_direction);
-          if (ndl > 0.0f) light += ndl * lt.color;
-        } else {
-          const Vec3f to = lt.position_or_direction - hit;
-          const float dist2 = to.squaredNorm();
-          const float ndl = normal.dot(to) / std::sqrt(dist2);
-          if (ndl > 0.0f) light += (ndl / (1.0f + dist2 * lt.inv_range2)) * lt.color;
-        }
-      }
-      for (int k = 0; k < 3; ++k) {
-        const float c = albedo[k] * light[k] * 255.0f + 0.5f;
-        rgb_row[3 * u + k] = static_cast<std::uint8_t>(c < 0.0f ? 0.0f : (c > 255.0f ? 255.0f : c));
-      }
-      depth_row[u] = t;
-      if (effects) incidence_cos[i] = std::abs(normal.dot(d)) / d.norm();
-    }
-  }
-
+  std::vector<float> incidence_cos(effects ? zbuf.z.size() : 0, 1.0f);
+  Shade(sc, rays, zbuf, &out, effects ? &incidence_cos : nullptr);
   if (effects) {
-    // One generator per frame, seeded from the options' seed and the exact pose and camera:
-    // the same inputs give the same noise, different poses give independent noise.
-    std::uint64_t key = Mix64(sensor_.seed + 0x1234567ull);
-    if (stamped) {
-      std::uint64_t bits;
-      std::memcpy(&bits, &stamp, sizeof bits);
-      key = Mix64(key ^ bits ^ 0x5851f42d4c957f2dull);
-    }
-    const Vector7d v7 = camera_to_world.ToVector7();
-    for (int k = 0; k < 7; ++k) {
-      std::uint64_t bits;
-      std::memcpy(&bits, &v7[k], sizeof bits);
-      key = Mix64(key ^ bits);
-    }
-    key = Mix64(key ^ (static_cast<std::uint64_t>(w) << 32 | static_cast<std::uint64_t>(h)));
-    const float cos_graze =
-        sensor_.grazing_angle_deg > 0.0
-            ? static_cast<float>(std::cos(sensor_.grazing_angle_deg * M_PI / 180.0))
-            : -1.0f;
-    const auto rgb_sigma = static_cast<float>(sensor_.rgb_noise_sigma);
-    const auto dropout = static_cast<float>(sensor_.depth_dropout);
-    for (int v = 0; v < h; ++v) {
-      float* depth_row = out.depth.ptr<float>(v);
-      std::uint8_t* rgb_row = out.rgb.ptr<std::uint8_t>(v);
-      for (int u = 0; u < w; ++u) {
-        const std::size_t i = static_cast<std::size_t>(v) * w + u;
-        // Counter-based randomness: two 64-bit hashes per pixel, no generator state, the same
-        // numbers on every platform and standard library.
-        const std::uint64_t r1 = Mix64(key + 2 * i), r2 = Mix64(key + 2 * i + 1);
-        float z = depth_row[u];
-        if (z > 0.0f) {
-          if ((sensor_.max_range > 0.0 && z > sensor_.max_range) ||
-              (sensor_.min_range > 0.0 && z < sensor_.min_range) || incidence_cos[i] < cos_graze) {
-            z = 0.0f;
-          } else if (dropout > 0.0f && Uniform16(r2 >> 48) < dropout) {
-            z = 0.0f;
-          } else if (sensor_.depth_noise_sigma > 0.0 || sensor_.depth_noise_quadratic > 0.0) {
-            const float sigma = static_cast<float>(sensor_.depth_noise_sigma +
-                                                   sensor_.depth_noise_quadratic * z * z);
-            z = std::max(0.0f, z + sigma * Gaussian4(r1));
-          }
-          depth_row[u] = z;
-        }
-        if (rgb_sigma > 0.0f) {
-          for (int k = 0; k < 3; ++k) {
-            const float noise = rgb_sigma * Gaussian4(Mix64(r2 + 0x9e3779b97f4a7c15ull * (k + 1)));
-            const float c = rgb_row[3 * u + k] + noise + 0.5f;
-            rgb_row[3 * u + k] =
-                static_cast<std::uint8_t>(c < 0.0f ? 0.0f : (c > 255.0f ? 255.0f : c));
-          }
-        }
-      }
-    }
+    const std::uint64_t key =
+        NoiseKey(sensor_.seed, camera_to_world, rays.w, rays.h, stamp, stamped);
+    ApplySensorNoise(sensor_, key, incidence_cos, &out);
   }
   return out;
 }

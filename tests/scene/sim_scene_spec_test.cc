@@ -15,7 +15,7 @@ TEST_CASE("SimScene::FromSpec takes builtin:NAME, a bare name or a YAML file", "
   const Pose pose(Eigen::Vector3d(0, 0, 1.2), Eigen::Quaterniond(Eigen::AngleAxisd(
                                                   -M_PI / 2, Eigen::Vector3d::UnitX())));
   const auto ref = SimScene::BuiltIn("large_office").Render(pose, cam);
-  for (const std::string spec :
+  for (const std::string& spec :
        {std::string("builtin:large_office"), std::string("large_office"),
         p2i::testing::SourceDir() + "/scene/scenes/large_office.yaml"}) {
     INFO(spec);
