@@ -3,7 +3,7 @@
 /// a small-office arm sweep. Prints a table and writes CSV.
 ///
 /// Usage: render_bench [--scene small_office|large_office|FILE.yaml] [--frames N]
-///                     [--csv render_bench.csv] [--sensor]
+///                     [--csv render_bench.csv] [--sensor | --realistic]
 ///                     [--dump DIR]  (also writes the first frame of each size as PNG)
 #include <time.h>
 
@@ -48,7 +48,7 @@ p2i::scene::CameraInfo MakeCamera(int w, int h) {
 int main(int argc, char** argv) {
   std::string scene_name = "small_office", csv_path = "render_bench.csv";
   int frames = 60;
-  bool sensor = false;
+  std::string sensor;  // "" = exact, kinect, realistic
   std::string dump_dir;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -61,10 +61,12 @@ int main(int argc, char** argv) {
     } else if (a == "--dump" && i + 1 < argc) {
       dump_dir = argv[++i];
     } else if (a == "--sensor") {
-      sensor = true;
+      sensor = "kinect";
+    } else if (a == "--realistic") {
+      sensor = "realistic";
     } else {
       std::cerr << "usage: render_bench [--scene NAME|FILE.yaml] [--frames N] [--csv FILE] "
-                   "[--sensor] [--dump DIR]\n";
+                   "[--sensor | --realistic] [--dump DIR]\n";
       return 2;
     }
   }
@@ -73,12 +75,15 @@ int main(int argc, char** argv) {
         scene_name.size() > 5 && scene_name.substr(scene_name.size() - 5) == ".yaml"
             ? p2i::scene::SimScene::FromYamlFile(scene_name)
             : p2i::scene::SimScene::BuiltIn(scene_name);
-    if (sensor) scene.set_sensor_options(p2i::scene::SimSensorOptions::Kinect(1));
+    if (sensor == "kinect") scene.set_sensor_options(p2i::scene::SimSensorOptions::Kinect(1));
+    if (sensor == "realistic") {
+      scene.set_sensor_options(p2i::scene::SimSensorOptions::Realistic(1));
+    }
     const auto trajectory = p2i::scene::GenerateArmSweep(p2i::scene::ArmSweepOptions());
     std::ofstream csv(csv_path);
     csv << "scene,width,height,frames,median_ms,mean_ms,fps,median_cpu_ms,cpu_fps\n";
     std::printf("scene %s, %d frames per size, one thread%s\n", scene_name.c_str(), frames,
-                sensor ? ", kinect sensor effects" : "");
+                sensor.empty() ? "" : (", " + sensor + " sensor effects").c_str());
     std::printf("%10s %10s %10s %10s %10s %10s\n", "size", "median_ms", "mean_ms", "fps", "cpu_ms",
                 "cpu_fps");
     const int sizes[][2] = {{640, 480}, {256, 256}, {128, 128}};
@@ -87,10 +92,11 @@ int main(int argc, char** argv) {
       std::vector<double> ms, cpu_ms;
       double checksum = 0;
       for (int f = 0; f < frames; ++f) {
-        const auto& pose = trajectory[(f * 7) % trajectory.size()].pose;
+        const std::size_t index = (f * 7) % trajectory.size();
         const double c0 = ThreadCpuMs();
         const auto t0 = std::chrono::steady_clock::now();
-        const auto sample = scene.Render(pose, camera);
+        // Along the trajectory: with --realistic the motion blur of the sweep's own motion.
+        const auto sample = scene.RenderOnTrajectory(trajectory, index, camera);
         const auto t1 = std::chrono::steady_clock::now();
         cpu_ms.push_back(ThreadCpuMs() - c0);
         checksum += sample.depth.at<float>(s[1] / 2, s[0] / 2);

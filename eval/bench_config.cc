@@ -115,7 +115,8 @@ BenchConfig BenchConfig::FromYamlString(const std::string& text, const std::stri
   const YAML::Node ds = r.Require(root, "dataset", "the bench config");
   r.CheckKeys(ds,
               {"scene", "path", "format", "seven_scenes_invalid_depth", "trajectories",
-               "trajectory_offset", "heights", "speed", "max_frames", "frame_step", "render_size"},
+               "trajectory_offset", "heights", "speed", "max_frames", "frame_step", "render_size",
+               "sensor", "specular"},
               "dataset");
   auto& d = c.dataset;
   if (ds["scene"]) d.scene = r.String(ds["scene"], "dataset.scene");
@@ -138,6 +139,8 @@ BenchConfig BenchConfig::FromYamlString(const std::string& text, const std::stri
   if (ds["max_frames"]) d.max_frames = Int(r, ds["max_frames"], "dataset.max_frames", 0);
   if (ds["frame_step"]) d.frame_step = Int(r, ds["frame_step"], "dataset.frame_step", 1);
   if (ds["render_size"]) d.render_size = Int(r, ds["render_size"], "dataset.render_size", 16);
+  if (ds["sensor"]) d.sensor = scene::SimSensorOptions::FromYaml(ds["sensor"], source);
+  if (ds["specular"]) d.specular = Bool(r, ds["specular"], "dataset.specular");
 
   // --- settings ---
   c.settings = Strings(r, r.Require(root, "settings", "the bench config"), "settings");

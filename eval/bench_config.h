@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "model/p2i_config.h"
+#include "scene/sim_sensor_options.h"
 
 namespace p2i::eval {
 
@@ -26,6 +27,10 @@ struct DatasetSpec {
   int max_frames = 0;               ///< frames per sequence kept (0 = all), after frame_step
   int frame_step = 1;               ///< keep every k-th frame
   int render_size = 0;              ///< scene: square render side (0 = largest size resolution)
+  /// scene: the sensor model the frames are rendered with (default: none, the exact render;
+  /// the shipped configs use {preset: realistic}: docs/SCENE.md)
+  scene::SimSensorOptions sensor;
+  bool specular = true;  ///< scene: false renders view-dependent materials Lambertian
   bool IsSim() const { return !scene.empty(); }
 };
 

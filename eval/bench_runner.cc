@@ -76,6 +76,27 @@ std::string Fixed(double v, int digits = 2) {
 }
 
 // ---------------------------------------------------------------- data
+// How a sim scene's frames were rendered, for the report.
+std::string SensorDescription(const scene::SimScene& sim) {
+  const scene::SimSensorOptions& o = sim.sensor_options();
+  std::string s = sim.description().AnyViewDependent() ? "specular materials" : "Lambertian";
+  if (!o.AnyEnabled()) return s + ", exact: no sensor effects";
+  if (o.AnyNoise()) {
+    s += ", depth noise " + Fixed(o.depth_noise_sigma * 1000, 1) + " mm + " +
+         Fixed(o.depth_noise_quadratic * 1000, 1) + " mm/m^2, range " + Fixed(o.min_range, 1) +
+         "-" + Fixed(o.max_range, 1) + " m, holes beyond " + Fixed(o.grazing_angle_deg, 0) +
+         " deg, dropout " + Fixed(o.depth_dropout * 100, 1) + " %, RGB noise " +
+         Fixed(o.rgb_noise_sigma, 1);
+  }
+  if (o.AnyColour()) {
+    s += ", auto-exposure " + Fixed(o.auto_exposure, 2) + ", exposure drift " +
+         Fixed(o.exposure_drift * 100, 0) + " %, white-balance drift " +
+         Fixed(o.white_balance_drift * 100, 0) + " %";
+  }
+  if (o.MotionBlur()) s += ", motion blur over " + Fixed(o.exposure_time_s * 1000, 0) + " ms";
+  return s + ", sensor seed " + std::to_string(o.seed);
+}
+
 struct Data {
   scene::DatasetIndex index;
   std::optional<scene::SimScene> sim;  // set for sim scenes: exact ground truth anywhere
@@ -87,6 +108,8 @@ Data PrepareData(const BenchConfig& c, const std::string& out_dir, bool quiet) {
   const auto& d = c.dataset;
   if (d.IsSim()) {
     data.sim = scene::SimScene::FromSpec(d.scene);
+    if (!d.specular) data.sim = data.sim->Lambertian();
+    data.sim->set_sensor_options(d.sensor);
     int side = d.render_size;
     for (const auto& s : c.sizes) side = std::max(side, s.resolution);
     const scene::CameraInfo camera = scene::SimScene::DefaultCamera(side, side);
@@ -107,8 +130,7 @@ Data PrepareData(const BenchConfig& c, const std::string& out_dir, bool quiet) {
       int kept = 0;
       for (size_t i = 0; i < trajectories[k].size(); i += d.frame_step) {
         if (d.max_frames > 0 && kept >= d.max_frames) break;
-        const auto& p = trajectories[k][i];
-        writer.Append(data.sim->Render(p.pose, camera, p.stamp));
+        writer.Append(data.sim->RenderOnTrajectory(trajectories[k], i, camera));
         ++kept;
       }
       total += kept;
@@ -116,7 +138,7 @@ Data PrepareData(const BenchConfig& c, const std::string& out_dir, bool quiet) {
     data.index = scene::OpenDataset(root.string());
     data.description = "sim scene `" + d.scene + "`, " + std::to_string(trajectories.size()) +
                        " adjacent arm sweeps (" + Fixed(d.trajectory_offset, 2) + " m apart), " + std::to_string(total) + " frames rendered at " +
-                       std::to_string(side) + "x" + std::to_string(side) + " (exact, no noise)";
+                       std::to_string(side) + "x" + std::to_string(side) + " (" + SensorDescription(*data.sim) + ")";
   } else {
     scene::DatasetOptions o;
     o.format = d.format;

@@ -78,7 +78,9 @@ objects:
   - {name: lamp_shade, shape: sphere, center: [2.55, 2.15, 1.7], radius: 0.18, material: ceiling_tiles}
 )p2i_yaml"},
       {"large_office", R"p2i_yaml(# Large office (10 m x 8 m x 3 m), like the larger room of the P2I-NET paper's CP2V^2 dataset:
-# a row of workstations, shelves, a meeting corner, pillars and posters.
+# a row of workstations, shelves, a meeting corner, pillars and posters. The varnished floor,
+# white desks, screens, metal and the whiteboard are glossy (specular: a highlight that moves with
+# the view), so the scene is not purely Lambertian.
 # World frame: z up, floor at z = 0, the room spans x in [-5, 5], y in [-4, 4].
 # The centre (radius ~1.2 m around x = y = 0) and the arm zone (|x| < 1.2, -2.5 < y < -0.6) are
 # kept free of furniture so the default trajectories fit. Format: docs/SCENE.md.
@@ -90,24 +92,24 @@ room:
   ceiling: ceiling_tiles
   walls: [plaster_warm, plaster_cool, plaster_cool, plaster_warm]  # at -x, +x, -y, +y
 materials:
-  floor_wood: {texture: wood, color: [0.70, 0.52, 0.34], color2: [0.48, 0.32, 0.20], scale: 0.35}
+  floor_wood: {texture: wood, color: [0.70, 0.52, 0.34], color2: [0.48, 0.32, 0.20], scale: 0.35, specular: 0.8, shininess: 20}
   ceiling_tiles: {texture: tiles, color: [0.92, 0.92, 0.90], color2: [0.6, 0.6, 0.6], scale: 0.6}
   plaster_warm: {texture: noise, color: [0.88, 0.82, 0.72], color2: [0.70, 0.64, 0.55], scale: 0.5}
   plaster_cool: {texture: noise, color: [0.80, 0.84, 0.86], color2: [0.62, 0.66, 0.70], scale: 0.5}
-  desk_white: {texture: noise, color: [0.92, 0.92, 0.90], color2: [0.80, 0.80, 0.78], scale: 0.1}
+  desk_white: {texture: noise, color: [0.92, 0.92, 0.90], color2: [0.80, 0.80, 0.78], scale: 0.1, specular: 0.6, shininess: 60}
   oak: {texture: wood, color: [0.80, 0.60, 0.38], color2: [0.52, 0.34, 0.18], scale: 0.3}
   walnut: {texture: wood, color: [0.50, 0.33, 0.20], color2: [0.28, 0.17, 0.10], scale: 0.25}
-  metal: {texture: noise, color: [0.62, 0.64, 0.66], color2: [0.45, 0.47, 0.50], scale: 0.2}
+  metal: {texture: noise, color: [0.62, 0.64, 0.66], color2: [0.45, 0.47, 0.50], scale: 0.2, specular: 1.0, shininess: 40}
   concrete: {texture: noise, color: [0.66, 0.66, 0.64], color2: [0.45, 0.45, 0.44], scale: 0.15}
   books_a: {texture: stripes, color: [0.70, 0.15, 0.12], color2: [0.15, 0.30, 0.60], scale: 0.06}
   books_b: {texture: stripes, color: [0.85, 0.70, 0.20], color2: [0.20, 0.50, 0.25], scale: 0.05}
-  screen: {texture: checker, color: [0.10, 0.12, 0.15], color2: [0.20, 0.35, 0.55], scale: 0.04}
+  screen: {texture: checker, color: [0.10, 0.12, 0.15], color2: [0.20, 0.35, 0.55], scale: 0.04, specular: 1.0, shininess: 120}
   fabric: {texture: noise, color: [0.20, 0.30, 0.55], color2: [0.10, 0.15, 0.30], scale: 0.05}
   fabric_red: {texture: noise, color: [0.60, 0.15, 0.15], color2: [0.30, 0.06, 0.06], scale: 0.05}
   foliage: {texture: noise, color: [0.20, 0.55, 0.20], color2: [0.05, 0.25, 0.08], scale: 0.05}
   terracotta: {texture: stripes, color: [0.72, 0.38, 0.22], color2: [0.60, 0.30, 0.16], scale: 0.05}
   carpet: {texture: checker, color: [0.30, 0.32, 0.40], color2: [0.45, 0.47, 0.55], scale: 0.25}
-  whiteboard: {texture: checker, color: [0.96, 0.96, 0.96], color2: [0.88, 0.90, 0.92], scale: 0.1}
+  whiteboard: {texture: checker, color: [0.96, 0.96, 0.96], color2: [0.88, 0.90, 0.92], scale: 0.1, specular: 0.8, shininess: 80}
   poster_a: {texture: poster, color: [0.95, 0.85, 0.20], color2: [0.10, 0.10, 0.40], scale: 0.2, seed: 101}
   poster_b: {texture: poster, color: [0.90, 0.30, 0.30], color2: [0.05, 0.40, 0.30], scale: 0.15, seed: 102}
   poster_c: {texture: poster, color: [0.95, 0.95, 0.95], color2: [0.10, 0.10, 0.10], scale: 0.25, seed: 103}

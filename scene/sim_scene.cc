@@ -11,6 +11,7 @@
 #include <stdexcept>
 
 #include "scene/sim_builtin_scenes.h"
+#include "scene/sim_sensor_model.h"
 #include "scene/sim_texture.h"
 
 namespace p2i::scene {
@@ -45,30 +46,6 @@ inline Vec3f ToWorld(const Primitive& p, const Vec3f& v) {
   return {p.cos_yaw * v.x() - p.sin_yaw * v.y(), p.sin_yaw * v.x() + p.cos_yaw * v.y(), v.z()};
 }
 
-std::uint64_t Mix64(std::uint64_t x) {
-  x ^= x >> 30;
-  x *= 0xbf58476d1ce4e5b9ull;
-  x ^= x >> 27;
-  x *= 0x94d049bb133111ebull;
-  x ^= x >> 31;
-  return x;
-}
-
-/// A uniform number in [0, 1) from 16 bits.
-inline float Uniform16(std::uint64_t bits) {
-  return static_cast<float>(bits & 0xffffu) * (1.0f / 65536.0f);
-}
-
-/// An approximately standard-normal number from 64 random bits: the sum of four 16-bit
-/// uniforms (Irwin-Hall), centred and scaled to unit variance. Tails end at +-3.46 sigma, which
-/// is fine for sensor noise and much cheaper than std::normal_distribution.
-inline float Gaussian4(std::uint64_t bits) {
-  const float sum =
-      Uniform16(bits) + Uniform16(bits >> 16) + Uniform16(bits >> 32) + Uniform16(bits >> 48);
-  return (sum - 2.0f) * 1.7320508f;
-}
-
-
 /// The scene compiled for the inner loops (floats, per-object corners). Immutable once built.
 struct CompiledScene {
   Vec3f room_min, room_max;
@@ -76,6 +53,7 @@ struct CompiledScene {
   std::vector<Primitive> prims;
   std::vector<SimTextureSampler> samplers;
   std::vector<Light> lights;
+  std::vector<float> specular, shininess;  // per material; specular 0 = Lambertian
   float ambient = 0.3f;
 };
 
@@ -85,7 +63,11 @@ void CompileScene(const SimSceneDescription& description, CompiledScene* c) {
   for (int i = 0; i < 4; ++i) c->face_material[i] = description.wall_materials[i];
   c->face_material[4] = description.floor_material;
   c->face_material[5] = description.ceiling_material;
-  for (const auto& m : description.materials) c->samplers.emplace_back(m);
+  for (const auto& m : description.materials) {
+    c->samplers.emplace_back(m);
+    c->specular.push_back(static_cast<float>(m.specular));
+    c->shininess.push_back(static_cast<float>(m.shininess));
+  }
   c->ambient = static_cast<float>(description.ambient);
   for (const auto& l : description.lights) {
     Light cl;
@@ -411,25 +393,49 @@ Vec3f Irradiance(const CompiledScene& sc, const Vec3f& normal, const Vec3f& hit)
   return light;
 }
 
-inline std::uint8_t To8Bit(float c) {
-  return static_cast<std::uint8_t>(c < 0.0f ? 0.0f : (c > 255.0f ? 255.0f : c));
+/// Blinn-Phong highlight of the lights at `hit` seen along `d` (light colour, unnormalised).
+Vec3f Highlight(const CompiledScene& sc, const Vec3f& normal, const Vec3f& hit, const Vec3f& d,
+                float shininess) {
+  const Vec3f to_eye = -d.normalized();
+  Vec3f sum = Vec3f::Zero();
+  for (const Light& lt : sc.lights) {
+    Vec3f to_light = lt.position_or_direction;
+    float attenuation = 1.0f;
+    if (!lt.directional) {
+      to_light -= hit;
+      const float dist2 = to_light.squaredNorm();
+      to_light /= std::sqrt(dist2);
+      attenuation = 1.0f / (1.0f + dist2 * lt.inv_range2);
+    }
+    if (normal.dot(to_light) <= 0.0f) continue;
+    const float ndh = normal.dot((to_light + to_eye).normalized());
+    if (ndh > 0.0f) sum += (attenuation * std::pow(ndh, shininess)) * lt.color;
+  }
+  return sum;
 }
 
+/// One frame before the sensor's colour pipeline: linear RGB scaled to 8-bit units (255 = white
+/// albedo fully lit; not clamped), z-depth and, when asked for, |cos| of each hit's incidence.
+struct LinearFrame {
+  int w = 0, h = 0;
+  std::vector<float> rgb;  // 3 per pixel, row-major
+  cv::Mat depth;           // CV_32FC1, 0 = nothing hit
+  std::vector<float> incidence_cos;
+};
+
 /// Deferred shading: every visible pixel is shaded exactly once; empty pixels are black with
-/// depth 0. With `incidence_cos` non-null it receives |cos| of each hit's incidence angle.
-void Shade(const CompiledScene& sc, const FrameRays& r, const ZBuffer& zb, RgbdSample* out,
-           std::vector<float>* incidence_cos) {
-  out->rgb.create(r.h, r.w, CV_8UC3);
-  out->depth.create(r.h, r.w, CV_32FC1);
+/// depth 0.
+void Shade(const CompiledScene& sc, const FrameRays& r, const ZBuffer& zb, LinearFrame* f) {
+  f->w = r.w, f->h = r.h;
+  f->rgb.assign(static_cast<std::size_t>(r.w) * r.h * 3, 0.0f);
+  f->depth.create(r.h, r.w, CV_32FC1);
   for (int v = 0; v < r.h; ++v) {
-    std::uint8_t* rgb_row = out->rgb.ptr<std::uint8_t>(v);
-    float* depth_row = out->depth.ptr<float>(v);
+    float* depth_row = f->depth.ptr<float>(v);
     const Vec3f row = r.Row(v);
     for (int u = 0; u < r.w; ++u) {
       const std::size_t i = static_cast<std::size_t>(v) * r.w + u;
       const int id = zb.ids[i];
       if (id < 0) {
-        rgb_row[3 * u] = rgb_row[3 * u + 1] = rgb_row[3 * u + 2] = 0;
         depth_row[u] = 0.0f;
         continue;
       }
@@ -441,72 +447,56 @@ void Shade(const CompiledScene& sc, const FrameRays& r, const ZBuffer& zb, RgbdS
       float albedo[3];
       sc.samplers[s.material].Sample(s.su, s.sv, albedo);
       const Vec3f light = Irradiance(sc, s.normal, hit);
-      for (int k = 0; k < 3; ++k) rgb_row[3 * u + k] = To8Bit(albedo[k] * light[k] * 255.0f + 0.5f);
+      float* px = &f->rgb[3 * i];
+      for (int k = 0; k < 3; ++k) px[k] = albedo[k] * light[k] * 255.0f;
+      if (sc.specular[s.material] > 0.0f) {
+        const Vec3f spec = Highlight(sc, s.normal, hit, d, sc.shininess[s.material]);
+        for (int k = 0; k < 3; ++k) px[k] += sc.specular[s.material] * spec[k] * 255.0f;
+      }
       depth_row[u] = t;
-      if (incidence_cos) (*incidence_cos)[i] = std::abs(s.normal.dot(d)) / d.norm();
+      if (!f->incidence_cos.empty()) f->incidence_cos[i] = std::abs(s.normal.dot(d)) / d.norm();
     }
   }
 }
 
-/// The key of a frame's noise: a hash of the options' seed, the stamp (when given), the exact
-/// pose and the image size. The same inputs give the same noise, different poses independent
-/// noise.
-std::uint64_t NoiseKey(std::uint32_t seed, const Pose& camera_to_world, int w, int h, double stamp,
-                       bool stamped) {
-  std::uint64_t key = Mix64(seed + 0x1234567ull);
-  if (stamped) {
-    std::uint64_t bits;
-    std::memcpy(&bits, &stamp, sizeof bits);
-    key = Mix64(key ^ bits ^ 0x5851f42d4c957f2dull);
-  }
-  const Vector7d v7 = camera_to_world.ToVector7();
-  for (int k = 0; k < 7; ++k) {
-    std::uint64_t bits;
-    std::memcpy(&bits, &v7[k], sizeof bits);
-    key = Mix64(key ^ bits);
-  }
-  return Mix64(key ^ (static_cast<std::uint64_t>(w) << 32 | static_cast<std::uint64_t>(h)));
+LinearFrame RenderLinear(const CompiledScene& sc, const Pose& pose, const CameraInfo& camera,
+                         bool with_incidence) {
+  const FrameRays rays = MakeFrameRays(pose, camera);
+  ZBuffer zbuf(static_cast<std::size_t>(rays.w) * rays.h);
+  RasterRoom(sc, rays, &zbuf);
+  RasterObjects(sc, rays, &zbuf);
+  LinearFrame f;
+  if (with_incidence) f.incidence_cos.assign(zbuf.z.size(), 1.0f);
+  Shade(sc, rays, zbuf, &f);
+  return f;
 }
 
-/// Depth range, grazing-angle holes, dropout, depth noise and RGB noise, in place.
-void ApplySensorNoise(const SimSensorOptions& sensor, std::uint64_t key,
-                      const std::vector<float>& incidence_cos, RgbdSample* out) {
-  const float cos_graze = sensor.grazing_angle_deg > 0.0
-                              ? static_cast<float>(std::cos(sensor.grazing_angle_deg * M_PI / 180.0))
-                              : -1.0f;
-  const auto rgb_sigma = static_cast<float>(sensor.rgb_noise_sigma);
-  const auto dropout = static_cast<float>(sensor.depth_dropout);
-  const int w = out->depth.cols, h = out->depth.rows;
-  for (int v = 0; v < h; ++v) {
-    float* depth_row = out->depth.ptr<float>(v);
-    std::uint8_t* rgb_row = out->rgb.ptr<std::uint8_t>(v);
-    for (int u = 0; u < w; ++u) {
-      const std::size_t i = static_cast<std::size_t>(v) * w + u;
-      // Counter-based randomness: two 64-bit hashes per pixel, no generator state, the same
-      // numbers on every platform and standard library.
-      const std::uint64_t r1 = Mix64(key + 2 * i), r2 = Mix64(key + 2 * i + 1);
-      float z = depth_row[u];
-      if (z > 0.0f) {
-        if ((sensor.max_range > 0.0 && z > sensor.max_range) ||
-            (sensor.min_range > 0.0 && z < sensor.min_range) || incidence_cos[i] < cos_graze) {
-          z = 0.0f;
-        } else if (dropout > 0.0f && Uniform16(r2 >> 48) < dropout) {
-          z = 0.0f;
-        } else if (sensor.depth_noise_sigma > 0.0 || sensor.depth_noise_quadratic > 0.0) {
-          const float sigma =
-              static_cast<float>(sensor.depth_noise_sigma + sensor.depth_noise_quadratic * z * z);
-          z = std::max(0.0f, z + sigma * Gaussian4(r1));
-        }
-        depth_row[u] = z;
-      }
-      if (rgb_sigma > 0.0f) {
-        for (int k = 0; k < 3; ++k) {
-          const float noise = rgb_sigma * Gaussian4(Mix64(r2 + 0x9e3779b97f4a7c15ull * (k + 1)));
-          rgb_row[3 * u + k] = To8Bit(rgb_row[3 * u + k] + noise + 0.5f);
-        }
+// Depth of a moving camera: a pixel whose surface changes during the shutter time by more than
+// this (relative) mixes two surfaces, which a depth sensor reports as a hole.
+constexpr float kMixedDepth = 0.05f;
+
+/// Motion blur: RGB becomes the mean of `samples` renders at poses evenly spread from shutter
+/// open to close; depth keeps the frame's own pose, with holes where the surface changed.
+void BlurOverShutter(const CompiledScene& sc, const CameraInfo& camera, const Pose& open,
+                     const Pose& close, int samples, LinearFrame* f) {
+  std::vector<float> sum(f->rgb.size(), 0.0f);
+  cv::Mat mixed = cv::Mat::zeros(f->h, f->w, CV_8UC1);
+  for (int s = 0; s < samples; ++s) {
+    const Pose p = Pose::Interpolate(open, close, (s + 0.5) / samples);
+    const LinearFrame sub = RenderLinear(sc, p, camera, false);
+    for (std::size_t k = 0; k < sum.size(); ++k) sum[k] += sub.rgb[k];
+    for (int v = 0; v < f->h; ++v) {
+      const float* z = f->depth.ptr<float>(v);
+      const float* zs = sub.depth.ptr<float>(v);
+      std::uint8_t* m = mixed.ptr<std::uint8_t>(v);
+      for (int u = 0; u < f->w; ++u) {
+        if (std::abs(zs[u] - z[u]) > kMixedDepth * z[u]) m[u] = 1;
       }
     }
   }
+  const float inv = 1.0f / static_cast<float>(samples);
+  for (std::size_t k = 0; k < sum.size(); ++k) f->rgb[k] = sum[k] * inv;
+  f->depth.setTo(0.0f, mixed);
 }
 
 }  // namespace
@@ -588,32 +578,59 @@ bool SimScene::IsFree(const Eigen::Vector3d& point, double clearance) const {
 }
 
 RgbdSample SimScene::Render(const Pose& camera_to_world, const CameraInfo& camera) const {
-  return RenderImpl(camera_to_world, camera, 0.0, false);
+  return RenderImpl(camera_to_world, camera, 0.0, false, nullptr);
 }
 
 RgbdSample SimScene::Render(const Pose& camera_to_world, const CameraInfo& camera,
                             double stamp) const {
-  return RenderImpl(camera_to_world, camera, stamp, true);
+  return RenderImpl(camera_to_world, camera, stamp, true, nullptr);
+}
+
+RgbdSample SimScene::Render(const Pose& camera_to_world, const CameraInfo& camera, double stamp,
+                            const SimExposure& exposure) const {
+  return RenderImpl(camera_to_world, camera, stamp, true, &exposure);
+}
+
+RgbdSample SimScene::RenderOnTrajectory(const std::vector<StampedPose>& trajectory,
+                                        std::size_t index, const CameraInfo& camera) const {
+  if (index >= trajectory.size()) {
+    throw std::out_of_range("SimScene::RenderOnTrajectory: frame " + std::to_string(index) +
+                            " of a trajectory of " + std::to_string(trajectory.size()));
+  }
+  const StampedPose& p = trajectory[index];
+  if (!sensor_.MotionBlur()) return Render(p.pose, camera, p.stamp);
+  return Render(p.pose, camera, p.stamp,
+                ExposureOnTrajectory(trajectory, index, sensor_.exposure_time_s));
+}
+
+SimExposure ExposureOnTrajectory(const std::vector<StampedPose>& trajectory, std::size_t index,
+                                 double exposure_time_s) {
+  const StampedPose& p = trajectory.at(index);
+  const auto at = [&](double t) {
+    if (t <= trajectory.front().stamp) return trajectory.front().pose;
+    if (t >= trajectory.back().stamp) return trajectory.back().pose;
+    return InterpolateAt(trajectory, t).value_or(p.pose);
+  };
+  return {at(p.stamp - exposure_time_s / 2.0), at(p.stamp + exposure_time_s / 2.0)};
 }
 
 RgbdSample SimScene::RenderImpl(const Pose& camera_to_world, const CameraInfo& camera, double stamp,
-                                bool stamped) const {
-  const FrameRays rays = MakeFrameRays(camera_to_world, camera);
+                                bool stamped, const SimExposure* exposure) const {
   const Compiled& sc = *compiled_;
-  ZBuffer zbuf(static_cast<std::size_t>(rays.w) * rays.h);
-  RasterRoom(sc, rays, &zbuf);
-  RasterObjects(sc, rays, &zbuf);
-
+  const bool noise = sensor_.AnyNoise();
+  LinearFrame f = RenderLinear(sc, camera_to_world, camera, noise);
+  if (exposure != nullptr && sensor_.MotionBlur() &&
+      !exposure->open.equals(exposure->close, 0.0)) {
+    BlurOverShutter(sc, camera, exposure->open, exposure->close, sensor_.motion_blur_samples, &f);
+  }
   RgbdSample out;
   out.pose = camera_to_world;
   out.stamp = stamp;
-  const bool effects = sensor_.AnyEnabled();
-  std::vector<float> incidence_cos(effects ? zbuf.z.size() : 0, 1.0f);
-  Shade(sc, rays, zbuf, &out, effects ? &incidence_cos : nullptr);
-  if (effects) {
-    const std::uint64_t key =
-        NoiseKey(sensor_.seed, camera_to_world, rays.w, rays.h, stamp, stamped);
-    ApplySensorNoise(sensor_, key, incidence_cos, &out);
+  out.depth = f.depth;
+  QuantizeRgb(f.rgb, f.w, f.h, SensorColourGains(sensor_, f.rgb, stamp), &out.rgb);
+  if (noise) {
+    const std::uint64_t key = SensorNoiseKey(sensor_.seed, camera_to_world, f.w, f.h, stamp, stamped);
+    ApplySensorNoise(sensor_, key, f.incidence_cos, &out);
   }
   return out;
 }

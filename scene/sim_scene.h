@@ -25,8 +25,20 @@ struct SimBounds {
   }
 };
 
+/// The camera's poses when the shutter opens and closes: motion blur spans the motion between.
+struct SimExposure {
+  Pose open;
+  Pose close;
+};
+
+/// The shutter poses of frame `index` of a time-sorted `trajectory` for a shutter time centred on
+/// its stamp, interpolated on the trajectory (held at its first and last pose beyond its ends).
+SimExposure ExposureOnTrajectory(const std::vector<StampedPose>& trajectory, std::size_t index,
+                                 double exposure_time_s);
+
 /// Renders a room of textured boxes, cylinders and spheres with Lambertian shading (ambient plus
-/// point/directional lights, no shadows) by rasterising each primitive's screen-space bounding
+/// point/directional lights, no shadows) and, for materials with `specular` > 0, a Blinn-Phong
+/// highlight that moves with the view, by rasterising each primitive's screen-space bounding
 /// box with exact ray tests and a z-buffer, then shading each pixel once.
 ///
 /// Conventions: world frame z up, floor at z = 0 (see SimSceneDescription). Poses are
@@ -56,6 +68,9 @@ class SimScene {
   static SimScene FromSpec(const std::string& spec);
   /// The sim camera (calib/sim.yaml: f = 525 at 640 px, centred principal point) at width x height.
   static CameraInfo DefaultCamera(int width = 640, int height = 480);
+  /// This scene with every specular highlight removed (SimSceneDescription::Lambertian), same
+  /// sensor options: the view-independent render.
+  SimScene Lambertian() const { return SimScene(description_.Lambertian(), sensor_); }
 
   /// Renders the view from `camera_to_world`. `camera` must have positive size and focal
   /// lengths (std::invalid_argument otherwise). The sample's pose is the input pose, stamp 0.
@@ -63,6 +78,15 @@ class SimScene {
   /// Same, for a frame captured at `stamp` seconds: the sample carries the stamp, and sensor
   /// noise also depends on it (a still camera gets fresh noise every frame, reproducibly).
   RgbdSample Render(const Pose& camera_to_world, const CameraInfo& camera, double stamp) const;
+  /// Same, with motion blur over `exposure` when the sensor options' exposure_time_s is on
+  /// (RGB averaged over the shutter poses, depth of `camera_to_world` with holes where the
+  /// surface changed); equal open and close poses give the unblurred frame.
+  RgbdSample Render(const Pose& camera_to_world, const CameraInfo& camera, double stamp,
+                    const SimExposure& exposure) const;
+  /// Frame `index` of `trajectory` at its stamp, with the motion blur of the camera's motion
+  /// along it when the sensor options ask for it (ExposureOnTrajectory).
+  RgbdSample RenderOnTrajectory(const std::vector<StampedPose>& trajectory, std::size_t index,
+                                const CameraInfo& camera) const;
 
   /// The room's inner bounds.
   SimBounds Bounds() const;
@@ -79,7 +103,7 @@ class SimScene {
   SimSceneDescription description_;
   SimSensorOptions sensor_;
   RgbdSample RenderImpl(const Pose& camera_to_world, const CameraInfo& camera, double stamp,
-                        bool stamped) const;
+                        bool stamped, const SimExposure* exposure) const;
 
   std::shared_ptr<const Compiled> compiled_;  // immutable after construction: shared by copies
 };

@@ -71,11 +71,14 @@ SimSceneDescription SimSceneDescription::FromYamlString(const std::string& text,
     SimMaterial m;
     m.name = kv.first.as<std::string>();
     const std::string what = "material '" + m.name + "'";
-    r.CheckKeys(kv.second, {"texture", "color", "color2", "scale", "seed"}, what);
+    r.CheckKeys(kv.second, {"texture", "color", "color2", "scale", "seed", "specular", "shininess"},
+                what);
     if (kv.second["texture"]) m.texture = ParseTexture(r, kv.second["texture"]);
     r.OptionalVec3(kv.second, "color", what, &m.color);
     r.OptionalVec3(kv.second, "color2", what, &m.color2);
     r.OptionalDouble(kv.second, "scale", what, &m.scale);
+    r.OptionalDouble(kv.second, "specular", what, &m.specular);
+    r.OptionalDouble(kv.second, "shininess", what, &m.shininess);
     m.seed = HashName(m.name);
     if (kv.second["seed"]) {
       m.seed = static_cast<std::uint32_t>(r.Double(kv.second["seed"], what + ".seed"));
@@ -191,6 +194,14 @@ void SimSceneDescription::Validate() const {
         m.color2.maxCoeff() > 1.0) {
       fail("material '" + m.name + "': colours are RGB in [0, 1]");
     }
+    if (!(m.specular >= 0.0 && m.specular <= 2.0)) {
+      fail("material '" + m.name + "': specular must be in [0, 2] (got " +
+           std::to_string(m.specular) + ")");
+    }
+    if (!(m.shininess >= 1.0 && m.shininess <= 10000.0)) {
+      fail("material '" + m.name + "': shininess must be in [1, 10000] (got " +
+           std::to_string(m.shininess) + ")");
+    }
   }
   for (const auto& o : objects) {
     check_index(o.material, "object '" + o.name + "'");
@@ -215,6 +226,19 @@ void SimSceneDescription::Validate() const {
       fail("directional light needs a non-zero direction");
     }
   }
+}
+
+bool SimSceneDescription::AnyViewDependent() const {
+  for (const auto& m : materials) {
+    if (m.specular > 0.0) return true;
+  }
+  return false;
+}
+
+SimSceneDescription SimSceneDescription::Lambertian() const {
+  SimSceneDescription d = *this;
+  for (auto& m : d.materials) m.specular = 0.0;
+  return d;
 }
 
 }  // namespace p2i::scene

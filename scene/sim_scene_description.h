@@ -15,7 +15,8 @@ namespace p2i::scene {
 /// that blur and other quality losses in synthesised views are measurable.
 enum class SimTexture { kSolid, kChecker, kTiles, kWood, kNoise, kPoster, kStripes };
 
-/// A Lambertian surface: albedo from a procedural texture over surface coordinates in metres.
+/// A surface: albedo from a procedural texture over surface coordinates in metres, Lambertian
+/// unless `specular` > 0 adds a view-dependent (Blinn-Phong) highlight of the lights' colour.
 struct SimMaterial {
   std::string name;
   SimTexture texture = SimTexture::kSolid;
@@ -23,6 +24,8 @@ struct SimMaterial {
   Eigen::Vector3d color2{0.3, 0.3, 0.3};  ///< second colour (checker, grout, grain, ...)
   double scale = 0.25;                    ///< metres per pattern period (tile, checker, cell)
   std::uint32_t seed = 0;                 ///< varies noise and poster patterns
+  double specular = 0.0;   ///< highlight strength in [0, 2] (0 = Lambertian, view-independent)
+  double shininess = 40.0;  ///< Blinn-Phong exponent in [1, 10000]: higher = smaller, sharper
 };
 
 enum class SimShape { kBox, kCylinder, kSphere };
@@ -72,6 +75,11 @@ struct SimSceneDescription {
 
   /// Throws std::invalid_argument saying what is wrong (sizes, indices, finite values).
   void Validate() const;
+
+  /// True when some material has a specular highlight.
+  bool AnyViewDependent() const;
+  /// A copy with every highlight removed (specular = 0): the Lambertian scene.
+  SimSceneDescription Lambertian() const;
 
   Eigen::Vector3d RoomMin() const { return {-room_size.x() / 2, -room_size.y() / 2, 0.0}; }
   Eigen::Vector3d RoomMax() const { return {room_size.x() / 2, room_size.y() / 2, room_size.z()}; }

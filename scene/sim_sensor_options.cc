@@ -1,12 +1,14 @@
 /// @file sim_sensor_options.cc
-/// @brief Sensor effect options: Kinect preset, YAML parsing, validation.
+/// @brief Sensor effect options: presets, YAML parsing, validation.
 #include "scene/sim_sensor_options.h"
 
 #include <yaml-cpp/yaml.h>
 
 #include <cmath>
 #include <set>
+#include <sstream>
 #include <stdexcept>
+#include <type_traits>
 
 namespace p2i::scene {
 
@@ -23,6 +25,47 @@ SimSensorOptions SimSensorOptions::Kinect(std::uint32_t seed) {
   return o;
 }
 
+SimSensorOptions SimSensorOptions::Realistic(std::uint32_t seed) {
+  SimSensorOptions o = Kinect(seed);
+  o.auto_exposure = 0.6;
+  o.exposure_drift = 0.08;
+  o.white_balance_drift = 0.04;
+  o.exposure_time_s = 0.03;
+  o.motion_blur_samples = 5;
+  return o;
+}
+
+namespace {
+
+struct Field {
+  const char* key;
+  double SimSensorOptions::*member;
+};
+
+constexpr Field kFields[] = {
+    {"depth_noise_sigma", &SimSensorOptions::depth_noise_sigma},
+    {"depth_noise_quadratic", &SimSensorOptions::depth_noise_quadratic},
+    {"min_range", &SimSensorOptions::min_range},
+    {"max_range", &SimSensorOptions::max_range},
+    {"grazing_angle_deg", &SimSensorOptions::grazing_angle_deg},
+    {"depth_dropout", &SimSensorOptions::depth_dropout},
+    {"rgb_noise_sigma", &SimSensorOptions::rgb_noise_sigma},
+    {"auto_exposure", &SimSensorOptions::auto_exposure},
+    {"exposure_target", &SimSensorOptions::exposure_target},
+    {"exposure_drift", &SimSensorOptions::exposure_drift},
+    {"white_balance_drift", &SimSensorOptions::white_balance_drift},
+    {"drift_period_s", &SimSensorOptions::drift_period_s},
+    {"exposure_time_s", &SimSensorOptions::exposure_time_s},
+};
+
+std::string Num(double v) {
+  std::ostringstream os;
+  os << v;
+  return os.str();
+}
+
+}  // namespace
+
 SimSensorOptions SimSensorOptions::FromYaml(const YAML::Node& node, const std::string& source) {
   const auto fail = [&](const YAML::Node& n, const std::string& what) {
     const int line = n.Mark().is_null() ? 0 : n.Mark().line + 1;
@@ -31,44 +74,44 @@ SimSensorOptions SimSensorOptions::FromYaml(const YAML::Node& node, const std::s
   SimSensorOptions o;
   if (!node.IsDefined() || node.IsNull()) return o;
   if (!node.IsMap()) fail(node, "must be a map");
-  static const std::set<std::string> kKeys = {
-      "preset",    "rgb_noise_sigma", "depth_noise_sigma", "depth_noise_quadratic",
-      "min_range", "max_range",       "grazing_angle_deg", "depth_dropout",
-      "seed"};
+  std::set<std::string> keys = {"preset", "seed", "motion_blur_samples"};
+  for (const Field& f : kFields) keys.insert(f.key);
   for (const auto& kv : node) {
     const std::string key = kv.first.as<std::string>();
-    if (kKeys.count(key) == 0) fail(kv.first, "unknown key '" + key + "'");
+    if (keys.count(key) == 0) {
+      std::string list;
+      for (const auto& k : keys) list += (list.empty() ? "" : ", ") + k;
+      fail(kv.first, "unknown key '" + key + "' (allowed: " + list + ")");
+    }
   }
   if (node["preset"]) {
     const std::string preset = node["preset"].as<std::string>();
     if (preset == "kinect") {
       o = Kinect();
+    } else if (preset == "realistic") {
+      o = Realistic();
     } else if (preset != "none") {
-      fail(node["preset"], "unknown preset '" + preset + "' (use none or kinect)");
+      fail(node["preset"], "unknown preset '" + preset + "' (use none, kinect or realistic)");
     }
   }
-  const auto get = [&](const char* key, double* out) {
+  for (const Field& f : kFields) {
+    if (!node[f.key]) continue;
+    try {
+      o.*f.member = node[f.key].as<double>();
+    } catch (const YAML::Exception&) {
+      fail(node[f.key], std::string(f.key) + " must be a number");
+    }
+  }
+  const auto get_int = [&](const char* key, auto* out) {
     if (!node[key]) return;
     try {
-      *out = node[key].as<double>();
+      *out = node[key].as<std::remove_pointer_t<decltype(out)>>();
     } catch (const YAML::Exception&) {
-      fail(node[key], std::string(key) + " must be a number");
+      fail(node[key], std::string(key) + " must be a non-negative integer");
     }
   };
-  get("rgb_noise_sigma", &o.rgb_noise_sigma);
-  get("depth_noise_sigma", &o.depth_noise_sigma);
-  get("depth_noise_quadratic", &o.depth_noise_quadratic);
-  get("min_range", &o.min_range);
-  get("max_range", &o.max_range);
-  get("grazing_angle_deg", &o.grazing_angle_deg);
-  get("depth_dropout", &o.depth_dropout);
-  if (node["seed"]) {
-    try {
-      o.seed = node["seed"].as<std::uint32_t>();
-    } catch (const YAML::Exception&) {
-      fail(node["seed"], "seed must be a non-negative integer");
-    }
-  }
+  get_int("seed", &o.seed);
+  get_int("motion_blur_samples", &o.motion_blur_samples);
   try {
     o.Validate();
   } catch (const std::invalid_argument& e) {
@@ -78,24 +121,52 @@ SimSensorOptions SimSensorOptions::FromYaml(const YAML::Node& node, const std::s
 }
 
 void SimSensorOptions::Validate() const {
-  for (double v : {rgb_noise_sigma, depth_noise_sigma, depth_noise_quadratic, min_range, max_range,
-                   grazing_angle_deg, depth_dropout}) {
+  for (const Field& f : kFields) {
+    const double v = this->*f.member;
     if (!std::isfinite(v) || v < 0.0) {
-      throw std::invalid_argument("sensor options must be finite and >= 0");
+      throw std::invalid_argument(std::string(f.key) + " must be finite and >= 0 (got " + Num(v) +
+                                  ")");
     }
   }
+  const auto at_most = [](const char* key, double v, double max, const char* why) {
+    if (v > max) {
+      throw std::invalid_argument(std::string(key) + " must be at most " + Num(max) + " (got " +
+                                  Num(v) + ")" + why);
+    }
+  };
   if (grazing_angle_deg >= 90.0) {
-    throw std::invalid_argument("grazing_angle_deg must be below 90 (0 turns it off)");
+    throw std::invalid_argument("grazing_angle_deg must be below 90 (got " +
+                                Num(grazing_angle_deg) + "; 0 turns it off)");
   }
-  if (depth_dropout > 1.0) throw std::invalid_argument("depth_dropout is a probability in [0, 1]");
+  at_most("depth_dropout", depth_dropout, 1.0, ": a probability");
+  at_most("auto_exposure", auto_exposure, 1.0, ": a strength in [0, 1]");
+  at_most("exposure_drift", exposure_drift, 0.5, "");
+  at_most("white_balance_drift", white_balance_drift, 0.5, "");
+  at_most("exposure_time_s", exposure_time_s, 1.0, "");
+  if (!(exposure_target > 0.0) || exposure_target > 1.0) {
+    throw std::invalid_argument("exposure_target must be in (0, 1] (got " + Num(exposure_target) +
+                                ")");
+  }
+  if (!(drift_period_s > 0.0)) {
+    throw std::invalid_argument("drift_period_s must be > 0 (got " + Num(drift_period_s) + ")");
+  }
+  if (motion_blur_samples < 1 || motion_blur_samples > 64) {
+    throw std::invalid_argument("motion_blur_samples must be in [1, 64] (got " +
+                                std::to_string(motion_blur_samples) + ")");
+  }
   if (max_range > 0.0 && min_range >= max_range) {
-    throw std::invalid_argument("min_range must be below max_range");
+    throw std::invalid_argument("min_range (" + Num(min_range) + ") must be below max_range (" +
+                                Num(max_range) + ")");
   }
 }
 
-bool SimSensorOptions::AnyEnabled() const {
+bool SimSensorOptions::AnyNoise() const {
   return rgb_noise_sigma > 0 || depth_noise_sigma > 0 || depth_noise_quadratic > 0 ||
          min_range > 0 || max_range > 0 || grazing_angle_deg > 0 || depth_dropout > 0;
+}
+
+bool SimSensorOptions::AnyColour() const {
+  return auto_exposure > 0 || exposure_drift > 0 || white_balance_drift > 0;
 }
 
 }  // namespace p2i::scene

@@ -96,3 +96,38 @@ sizes: [64]
   CHECK(ErrorOf("dataset: {scene: x, path: y}\nsettings: [a1]\nmethods: [nearest]\nsizes: [64]\n")
             .find("exactly one") != std::string::npos);
 }
+
+TEST_CASE("Bench config: the shipped sim configs render with the sensor model; exact on request",
+          "[unit]") {
+  for (const char* name :
+       {"tiny", "small_office_128", "large_office_128", "small_office_128_long", "ablation_64"}) {
+    INFO(name);
+    const auto c = BenchConfig::FromYamlFile(p2i::testing::SourceDir() + "/bench/configs/" +
+                                             name + ".yaml");
+    CHECK(c.dataset.sensor.AnyNoise());
+    CHECK(c.dataset.sensor.AnyColour());
+    CHECK(c.dataset.sensor.MotionBlur());
+    CHECK(c.dataset.specular);
+  }
+  // Without the keys: the exact render (no sensor effects), specular materials kept.
+  const BenchConfig plain = BenchConfig::FromYamlString(kBase, "my_bench.yaml");
+  CHECK_FALSE(plain.dataset.sensor.AnyEnabled());
+  CHECK(plain.dataset.specular);
+  const std::string exact = R"(dataset: {scene: builtin:large_office, sensor: {preset: none},
+          specular: false}
+settings: [a1]
+methods: [nearest]
+sizes: [64]
+)";
+  const BenchConfig e = BenchConfig::FromYamlString(exact, "my_bench.yaml");
+  CHECK_FALSE(e.dataset.sensor.AnyEnabled());
+  CHECK_FALSE(e.dataset.specular);
+  const std::string bad = ErrorOf(R"(dataset: {scene: builtin:small_office,
+  sensor: {preset: realistic, auto_exposure: 3}}
+settings: [a1]
+methods: [nearest]
+sizes: [64]
+)");
+  CHECK(bad.find("my_bench.yaml:2") != std::string::npos);
+  CHECK(bad.find("auto_exposure must be at most 1 (got 3)") != std::string::npos);
+}

@@ -340,3 +340,71 @@ TEST_CASE("SimScene sensor noise has the configured spread", "[unit]") {
   CHECK(std::abs(mean[0]) < 0.5);
   CHECK(stddev[0] == Approx(5.0).epsilon(0.15));
 }
+
+namespace {
+
+// The world point seen by the brightest pixel of `highlight` (a grey image), from its depth.
+Eigen::Vector3d BrightestPoint(const cv::Mat& highlight, const RgbdSample& s,
+                               const CameraInfo& camera, double* peak) {
+  cv::Point at;
+  cv::minMaxLoc(highlight, nullptr, peak, nullptr, &at);
+  const double z = s.depth.at<float>(at.y, at.x);
+  const Eigen::Vector3d p_cam((at.x - camera.cx()) / camera.fx() * z,
+                              (at.y - camera.cy()) / camera.fy() * z, z);
+  return s.pose * p_cam;
+}
+
+}  // namespace
+
+TEST_CASE("SimScene specular highlight sits at the light's mirror point and moves with the view",
+          "[unit]") {
+  // A glossy floor under one point light at (0, 0, 2.9): seen from C, the highlight is where the
+  // ray from the mirror image of C (below the floor) to the light crosses the floor.
+  const SimScene scene = SimScene::FromYamlString(R"(
+room: {size: [4.0, 4.0, 3.0], floor: glossy, ceiling: grey, walls: grey}
+materials:
+  grey: {texture: solid, color: [0.5, 0.5, 0.5]}
+  glossy: {texture: solid, color: [0.3, 0.3, 0.3], specular: 1.0, shininess: 200}
+lights:
+  - {type: point, position: [0.0, 0.0, 2.9]}
+)",
+                                                   "glossy_room");
+  REQUIRE(scene.description().AnyViewDependent());
+  const SimScene matte = scene.Lambertian();
+  CHECK_FALSE(matte.description().AnyViewDependent());
+  const auto camera = MakeCamera(160, 120, 120.0, 79.5, 59.5);
+  const Eigen::Vector3d light(0.0, 0.0, 2.9);
+
+  std::vector<Eigen::Vector3d> found;
+  for (const Eigen::Vector3d& eye : {Eigen::Vector3d(-1.2, -1.0, 1.3), Eigen::Vector3d(1.0, -1.4, 1.0)}) {
+    const Eigen::Vector3d mirror(eye.x(), eye.y(), -eye.z());
+    const Eigen::Vector3d expected = mirror + (light - mirror) * (eye.z() / (eye.z() + light.z()));
+    const Pose pose = LookAt(eye, expected);
+    const RgbdSample shiny = scene.Render(pose, camera), flat = matte.Render(pose, camera);
+    CHECK(cv::norm(shiny.depth, flat.depth, cv::NORM_INF) == 0.0);  // geometry unchanged
+    cv::Mat diff;
+    cv::subtract(shiny.rgb, flat.rgb, diff, cv::noArray(), CV_32FC3);
+    cv::cvtColor(diff, diff, cv::COLOR_RGB2GRAY);
+    double peak = 0;
+    const Eigen::Vector3d at = BrightestPoint(diff, shiny, camera, &peak);
+    INFO("eye " << eye.transpose() << " expected " << expected.transpose() << " found "
+                << at.transpose() << " peak " << peak);
+    CHECK(peak > 40.0);                         // a visible highlight
+    CHECK((at - expected).norm() < 0.05);       // at the mirror point
+    CHECK(cv::mean(diff)[0] < 0.2 * peak);      // a highlight, not a uniform brightening
+    found.push_back(at);
+  }
+  CHECK((found[0] - found[1]).norm() > 0.5);  // it moved with the view
+}
+
+TEST_CASE("SimScene large office has view-dependent materials; Lambertian() removes them",
+          "[unit]") {
+  const SimScene scene = SimScene::BuiltIn("large_office");
+  CHECK(scene.description().AnyViewDependent());
+  CHECK_FALSE(SimScene::BuiltIn("small_office").description().AnyViewDependent());
+  const auto camera = MakeCamera(80, 60, 60.0, 39.5, 29.5);
+  const Pose floor_view = LookAt({0.0, -1.5, 1.3}, {0.77, -1.19, 0.0});
+  const RgbdSample shiny = scene.Render(floor_view, camera);
+  const RgbdSample flat = scene.Lambertian().Render(floor_view, camera);
+  CHECK(cv::mean(shiny.rgb)[1] > cv::mean(flat.rgb)[1] + 5.0);
+}
