@@ -38,7 +38,7 @@
 #include <nlohmann/json.hpp>
 
 #include "msgs/codec.h"
-#include "nodes/camera/msg_convert.h"
+#include "convert/pose.h"
 #include "nodes/runtime/service_client.h"
 #include "scene/trajectory.h"
 
@@ -300,7 +300,7 @@ int main(int argc, char** argv) {
       for (int i = 0; i < warmup + requests; ++i) {
         if (i == warmup) t0 = Clock::now();
         msgs::pb::RenderRequest req;
-        nodes::ToMsg(sweep[i % sweep.size()].pose, req.add_poses());
+        convert::ToMsg(sweep[i % sweep.size()].pose, req.add_poses());
         msgs::RenderReplyMsg reply;
         std::string error;
         const auto s = Clock::now();

@@ -1,5 +1,5 @@
 /// @file image.cc
-/// @brief Image helpers and plain-double pose access.
+/// @brief Image helpers.
 #include "msgs/image.h"
 
 #include <memory>
@@ -48,24 +48,6 @@ Image Image::Allocate(Encoding encoding, uint32_t width, uint32_t height) {
   image.step = width * static_cast<uint32_t>(ChannelCount(encoding) * ElementSize(encoding));
   image.data = std::make_shared<const Bytes>(static_cast<size_t>(image.step) * height, 0);
   return image;
-}
-
-void SetPose(const std::array<double, 7>& v, pb::Pose* pose) {
-  auto* p = pose->mutable_position();
-  p->set_x(v[0]);
-  p->set_y(v[1]);
-  p->set_z(v[2]);
-  auto* q = pose->mutable_orientation();
-  q->set_x(v[3]);
-  q->set_y(v[4]);
-  q->set_z(v[5]);
-  q->set_w(v[6]);
-}
-
-std::array<double, 7> PoseVector(const pb::Pose& pose) {
-  const auto& p = pose.position();
-  const auto& q = pose.orientation();
-  return {p.x(), p.y(), p.z(), q.x(), q.y(), q.z(), q.w()};
 }
 
 }  // namespace p2i::msgs

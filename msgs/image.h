@@ -2,7 +2,6 @@
 /// @brief The C++ side of image-carrying messages: an Image is metadata plus a blob frame.
 #pragma once
 
-#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -63,10 +62,5 @@ struct RenderReplyMsg {
   pb::RenderReply meta;
   std::vector<Image> images;
 };
-
-/// Plain-double access to poses (msgs depends on protobuf only; scene::Pose conversion lives in
-/// the nodes). The 7-vector is TUM order: tx ty tz qx qy qz qw.
-void SetPose(const std::array<double, 7>& txyz_qxyzw, pb::Pose* pose);
-std::array<double, 7> PoseVector(const pb::Pose& pose);
 
 }  // namespace p2i::msgs

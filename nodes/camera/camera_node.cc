@@ -4,7 +4,9 @@
 
 #include <filesystem>
 
-#include "nodes/camera/msg_convert.h"
+#include "convert/camera_info.h"
+#include "convert/image.h"
+#include "convert/pose.h"
 #include "scene/dataset_loader.h"
 #include "scene/dataset_trajectories.h"
 #include "scene/image_ops.h"
@@ -35,7 +37,7 @@ CameraNode::CameraNode(const runtime::NodeArgs& args) : Node("camera", args) {
   msgs::pb::CameraInfo info;
   info.mutable_header()->set_frame_id(frame_id_);
   info.mutable_header()->set_capture_stamp_ns(runtime::NowNs());
-  ToMsg(camera_, &info);
+  convert::ToMsg(camera_, &info);
   runtime::PublisherOptions latched;
   latched.latched = true;
   info_pub_ = Advertise<msgs::pb::CameraInfo>("camera_info", latched);
@@ -100,7 +102,7 @@ void CameraNode::SetUpSim() {
         "pose",
         [this](const msgs::pb::PoseStamped& msg) {
           if (pending_pose_) Count("poses_skipped");
-          pending_pose_ = FromMsg(msg.pose());
+          pending_pose_ = convert::FromMsg(msg.pose());
           pending_stamp_ns_ = msg.header().capture_stamp_ns();
         },
         options);
@@ -215,10 +217,10 @@ void CameraNode::Publish(const cv::Mat& rgb, const cv::Mat& depth, const scene::
   msgs::RgbdFrame frame;
   frame.meta.mutable_header()->set_capture_stamp_ns(capture_stamp_ns);
   frame.meta.mutable_header()->set_frame_id(frame_id_);
-  ToMsg(camera_, frame.meta.mutable_camera_info());
-  if (pose != nullptr) ToMsg(*pose, frame.meta.mutable_pose());
-  frame.rgb = ToImage(rgb);
-  frame.depth = ToImage(depth);
+  convert::ToMsg(camera_, frame.meta.mutable_camera_info());
+  if (pose != nullptr) convert::ToMsg(*pose, frame.meta.mutable_pose());
+  frame.rgb = convert::ToImage(rgb);
+  frame.depth = convert::ToImage(depth);
   rgbd_pub_->Publish(frame);
   Count("frames_published");
 }
@@ -308,7 +310,7 @@ void CameraNode::SetUpLive(const std::string& backend) {
     mo.max_pending = static_cast<size_t>(max_pending);
     matcher_.emplace(mo);
     pose_sub_ = Subscribe<msgs::pb::PoseStamped>("pose", [this](const msgs::pb::PoseStamped& m) {
-      matcher_->AddPose(m.header().capture_stamp_ns(), FromMsg(m.pose()));
+      matcher_->AddPose(m.header().capture_stamp_ns(), convert::FromMsg(m.pose()));
       PublishMatched();
     });
   }

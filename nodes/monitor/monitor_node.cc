@@ -11,8 +11,10 @@
 
 #include <nlohmann/json.hpp>
 
+#include "convert/depth.h"
+#include "convert/image.h"
+#include "convert/pose.h"
 #include "model/metrics.h"
-#include "nodes/camera/msg_convert.h"
 #include "scene/image_ops.h"
 
 namespace p2i::nodes {
@@ -91,15 +93,9 @@ void MonitorNode::OnView(const msgs::View& view) {
   SetValue("views", static_cast<double>(views_received_));
   if ((views_received_ - 1) % score_every_ != 0) return;
 
-  const cv::Mat rgb = ToMat(view.rgb);
-  const cv::Mat depth_raw = ToMat(view.depth);
-  cv::Mat depth;
-  if (view.depth.encoding == msgs::pb::DEPTH16U) {
-    depth_raw.convertTo(depth, CV_32F, view.depth.depth_scale);
-  } else {
-    depth = depth_raw;
-  }
-  scene::RgbdSample truth = sim_->Render(FromMsg(view.meta.pose()), sim_camera_);
+  const cv::Mat rgb = convert::ToMat(view.rgb);
+  const cv::Mat depth = convert::DepthToMetres(view.depth);
+  scene::RgbdSample truth = sim_->Render(convert::FromMsg(view.meta.pose()), sim_camera_);
   truth = scene::CenterCropResizeSample(truth, rgb.cols, rgb.rows);
   psnr_.push_back(model::Psnr(rgb, truth.rgb));
   ssim_.push_back(model::Ssim(rgb, truth.rgb));

@@ -5,7 +5,7 @@
 #include <chrono>
 #include <optional>
 
-#include "nodes/camera/msg_convert.h"
+#include "convert/pose.h"
 #include "scene/dataset_trajectories.h"
 #include "scene/sim_scene.h"
 
@@ -89,7 +89,7 @@ void PoseSourceNode::PublishMeasured() {
   msgs::pb::PoseStamped msg;
   msg.mutable_header()->set_capture_stamp_ns(runtime::NowNs());
   msg.mutable_header()->set_frame_id(frame_id_);
-  ToMsg(measured_[measured_index_].pose, msg.mutable_pose(), frame_id_);
+  convert::ToMsg(measured_[measured_index_].pose, msg.mutable_pose(), frame_id_);
   pose_pub_->Publish(msg);
   Count("poses_published");
   if (!Advance(&measured_index_, measured_.size())) {
@@ -105,7 +105,7 @@ void PoseSourceNode::PublishPlanned() {
   msg.mutable_header()->set_capture_stamp_ns(runtime::NowNs());
   msg.mutable_header()->set_frame_id(frame_id_);
   msg.set_request_id(++request_id_);
-  ToMsg(planned_[planned_index_].pose, msg.mutable_pose(), frame_id_);
+  convert::ToMsg(planned_[planned_index_].pose, msg.mutable_pose(), frame_id_);
   planned_pub_->Publish(msg);
   Count("planned_published");
   if (!Advance(&planned_index_, planned_.size())) {

@@ -2,15 +2,13 @@
 /// @brief Message -> sink type conversions.
 #include "nodes/slam_sink/message_conversion.h"
 
-#include <cmath>
-#include <stdexcept>
-
-#include "nodes/camera/msg_convert.h"
+#include "convert/camera_info.h"
+#include "convert/depth.h"
+#include "convert/image.h"
+#include "convert/pose.h"
 
 namespace p2i::slam_sink {
 namespace {
-
-scene::Pose PoseFromMsg(const msgs::pb::Pose& pose) { return nodes::FromMsg(pose); }
 
 double StampOf(const msgs::pb::Header& h) {
   const int64_t ns = h.capture_stamp_ns() != 0 ? h.capture_stamp_ns() : h.publish_stamp_ns();
@@ -23,45 +21,14 @@ std::string SourceOf(const msgs::pb::Header& h, const std::string& topic) {
 
 }  // namespace
 
-cv::Mat ImageToMat(const msgs::Image& image, bool depth) {
-  if (!image.data || image.width == 0 || image.height == 0) {
-    throw std::invalid_argument("ImageToMat: the image has no data");
-  }
-  const int rows = static_cast<int>(image.height), cols = static_cast<int>(image.width);
-  if (!depth) {
-    if (image.encoding != msgs::pb::RGB8) {
-      throw std::invalid_argument(std::string("ImageToMat: colour must be RGB8, got ") +
-                                  msgs::EncodingName(image.encoding));
-    }
-    return nodes::ToMat(image).clone();
-  }
-  if (image.encoding != msgs::pb::DEPTH32F && image.encoding != msgs::pb::DEPTH16U) {
-    throw std::invalid_argument(std::string("ImageToMat: depth must be DEPTH32F or DEPTH16U, got ") +
-                                msgs::EncodingName(image.encoding));
-  }
-  const cv::Mat raw = nodes::ToMat(image);  // a view: CV_32FC1 or CV_16UC1, raw units
-  cv::Mat metres(rows, cols, CV_32FC1);
-  for (int r = 0; r < rows; ++r) {
-    float* out = metres.ptr<float>(r);
-    for (int c = 0; c < cols; ++c) {
-      const double v = raw.type() == CV_32FC1 ? raw.at<float>(r, c) : raw.at<uint16_t>(r, c);
-      const double m = v * image.depth_scale;
-      out[c] = (!std::isfinite(v) || v == image.invalid_value || !std::isfinite(m) || m <= 0.0)
-                   ? 0.0f
-                   : static_cast<float>(m);
-    }
-  }
-  return metres;
-}
-
 SinkFrame FrameFromView(const msgs::View& view, const std::string& topic) {
   SinkFrame frame;
   const msgs::pb::Header& h = view.meta.header();
   frame.stamp = StampOf(h);
-  frame.pose = PoseFromMsg(view.meta.pose());
+  frame.pose = convert::FromMsg(view.meta.pose());
   frame.has_pose = true;
-  frame.rgb = ImageToMat(view.rgb, false);
-  frame.depth = ImageToMat(view.depth, true);
+  frame.rgb = convert::RgbToMat(view.rgb);
+  frame.depth = convert::DepthToMetres(view.depth);
   frame.synthetic = true;
   frame.source = SourceOf(h, topic);
   frame.seq = h.seq();
@@ -77,9 +44,9 @@ SinkFrame FrameFromRgbd(const msgs::RgbdFrame& msg, const std::string& topic) {
   const msgs::pb::Header& h = msg.meta.header();
   frame.stamp = StampOf(h);
   frame.has_pose = msg.meta.has_pose();
-  if (frame.has_pose) frame.pose = PoseFromMsg(msg.meta.pose());
-  frame.rgb = ImageToMat(msg.rgb, false);
-  frame.depth = ImageToMat(msg.depth, true);
+  if (frame.has_pose) frame.pose = convert::FromMsg(msg.meta.pose());
+  frame.rgb = convert::RgbToMat(msg.rgb);
+  frame.depth = convert::DepthToMetres(msg.depth);
   frame.synthetic = false;
   frame.source = SourceOf(h, topic);
   frame.seq = h.seq();
@@ -88,7 +55,7 @@ SinkFrame FrameFromRgbd(const msgs::RgbdFrame& msg, const std::string& topic) {
 }
 
 scene::CameraInfo CameraFromMsg(const msgs::pb::CameraInfo& m) {
-  scene::CameraInfo c = nodes::FromMsg(m);
+  scene::CameraInfo c = convert::FromMsg(m);
   if (c.camera_name.empty()) c.camera_name = "camera";
   return c;
 }

@@ -2,13 +2,14 @@
 /// @brief SynthesizerCore: request validation, batched rendering, background hot swap.
 #include "nodes/synthesizer/synthesizer_core.h"
 
-#include "scene/trajectory_io.h"
-
 #include <cmath>
 #include <stdexcept>
 #include <utility>
 
-#include "nodes/camera/msg_convert.h"
+#include "convert/image.h"
+#include "convert/pose.h"
+#include "msgs/codec.h"
+#include "scene/trajectory_io.h"
 
 namespace p2i::nodes {
 namespace {
@@ -39,8 +40,10 @@ void SynthesizerCoreOptions::Validate() const {
     throw std::invalid_argument("synthesizer: method '" + method +
                                 "' is not one of p2i, cnn, nearest, warp");
   }
-  if (max_poses < 1 || max_poses > 4096) {
-    throw std::invalid_argument("synthesizer: max_poses must be in [1, 4096]");
+  if (max_poses < 1 || max_poses > msgs::kMaxBatch) {
+    throw std::invalid_argument("synthesizer: max_poses must be in [1, " +
+                                std::to_string(msgs::kMaxBatch) + "], got " +
+                                std::to_string(max_poses));
   }
   if (max_batch < 1) throw std::invalid_argument("synthesizer: max_batch must be >= 1");
 }
@@ -206,19 +209,11 @@ void SynthesizerCore::LoaderLoop() {
   }
 }
 
-bool SynthesizerCore::ValidPose(const msgs::pb::Pose& pose, std::string* why) {
-  const auto v = msgs::PoseVector(pose);
-  for (double x : v) {
-    if (!std::isfinite(x)) {
-      *why = "pose has a non-finite value";
-      return false;
-    }
-  }
-  const double norm = std::sqrt(v[3] * v[3] + v[4] * v[4] + v[5] * v[5] + v[6] * v[6]);
-  if (std::abs(norm - 1.0) > 1e-3) {
-    *why = "pose quaternion has norm " + std::to_string(norm) + ", expected 1";
-    return false;
-  }
+bool SynthesizerCore::ToScenePose(const msgs::pb::Pose& pose, const std::string& field,
+                                  scene::Pose* out, std::string* why) {
+  msgs::pb::Pose checked = pose;  // the codec's rule (finite, unit quaternion), normalised
+  if (!msgs::ValidatePose(&checked, field, why)) return false;
+  *out = convert::FromMsg(checked);
   return true;
 }
 
@@ -251,11 +246,12 @@ std::vector<SynthesizerCore::Rendered> SynthesizerCore::RenderWith(
   return out;
 }
 
-void SynthesizerCore::FillMeta(const Loaded& loaded, const msgs::pb::Pose& pose,
-                               const Rendered& r, msgs::pb::ViewMeta* meta) const {
-  *meta->mutable_pose() = pose;
+void SynthesizerCore::FillMeta(const Loaded& loaded, const msgs::pb::Pose& pose_msg,
+                               const scene::Pose& pose, const Rendered& r,
+                               msgs::pb::ViewMeta* meta) const {
+  *meta->mutable_pose() = pose_msg;
   meta->set_model_version(loaded.spec.version);
-  meta->set_coverage(loaded.coverage ? loaded.coverage->Score(FromMsg(pose)) : 0.0);
+  meta->set_coverage(loaded.coverage ? loaded.coverage->Score(pose) : 0.0);
   meta->set_queue_ms(r.queue_ms);
   meta->set_render_ms(r.render_ms);
   meta->set_method(options_.method);
@@ -285,14 +281,12 @@ void SynthesizerCore::HandleRender(const msgs::pb::RenderRequest& request,
     return refuse("bad_requests", "method '" + request.method() + "' is not served here (this "
                                   "synthesizer serves '" + options_.method + "')");
   }
-  std::vector<scene::Pose> poses;
-  poses.reserve(request.poses_size());
+  std::vector<scene::Pose> poses(static_cast<size_t>(request.poses_size()));
   for (int i = 0; i < request.poses_size(); ++i) {
     std::string why;
-    if (!ValidPose(request.poses(i), &why)) {
-      return refuse("bad_requests", "pose " + std::to_string(i) + ": " + why);
+    if (!ToScenePose(request.poses(i), "poses[" + std::to_string(i) + "]", &poses[i], &why)) {
+      return refuse("bad_requests", why);
     }
-    poses.push_back(FromMsg(request.poses(i)));
   }
   if (request.deadline_ns() > 0 && WallNowNs() > request.deadline_ns()) {
     return refuse("expired", "deadline passed before rendering started");
@@ -303,10 +297,10 @@ void SynthesizerCore::HandleRender(const msgs::pb::RenderRequest& request,
   try {
     std::vector<Rendered> rendered = RenderWith(loaded.get(), poses, receipt);
     for (size_t i = 0; i < rendered.size(); ++i) {
-      FillMeta(*loaded, request.poses(static_cast<int>(i)), rendered[i],
+      FillMeta(*loaded, request.poses(static_cast<int>(i)), poses[i], rendered[i],
                reply->meta.add_views());
-      reply->images.push_back(ToImage(rendered[i].view.rgb));
-      reply->images.push_back(ToImage(rendered[i].view.depth));
+      reply->images.push_back(convert::ToImage(rendered[i].view.rgb));
+      reply->images.push_back(convert::ToImage(rendered[i].view.depth));
     }
   } catch (const std::exception& e) {
     return refuse("render_errors", std::string("render failed: ") + e.what());
@@ -318,7 +312,8 @@ void SynthesizerCore::HandleRender(const msgs::pb::RenderRequest& request,
 bool SynthesizerCore::RenderView(const msgs::pb::Pose& pose, Clock::time_point receipt,
                                  msgs::View* view, std::string* error) {
   std::string why;
-  if (!ValidPose(pose, &why)) {
+  scene::Pose scene_pose;
+  if (!ToScenePose(pose, "pose", &scene_pose, &why)) {
     Count("bad_requests");
     *error = why;
     return false;
@@ -330,9 +325,9 @@ bool SynthesizerCore::RenderView(const msgs::pb::Pose& pose, Clock::time_point r
     return false;
   }
   try {
-    std::vector<Rendered> rendered = RenderWith(loaded.get(), {FromMsg(pose)}, receipt);
+    std::vector<Rendered> rendered = RenderWith(loaded.get(), {scene_pose}, receipt);
     msgs::pb::ViewMeta meta;
-    FillMeta(*loaded, pose, rendered[0], &meta);
+    FillMeta(*loaded, pose, scene_pose, rendered[0], &meta);
     view->meta.Clear();
     *view->meta.mutable_pose() = meta.pose();
     view->meta.set_model_version(meta.model_version());
@@ -340,8 +335,8 @@ bool SynthesizerCore::RenderView(const msgs::pb::Pose& pose, Clock::time_point r
     view->meta.set_queue_ms(meta.queue_ms());
     view->meta.set_render_ms(meta.render_ms());
     view->meta.set_method(meta.method());
-    view->rgb = ToImage(rendered[0].view.rgb);
-    view->depth = ToImage(rendered[0].view.depth);
+    view->rgb = convert::ToImage(rendered[0].view.rgb);
+    view->depth = convert::ToImage(rendered[0].view.depth);
   } catch (const std::exception& e) {
     Count("render_errors");
     *error = std::string("render failed: ") + e.what();

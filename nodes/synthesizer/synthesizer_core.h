@@ -106,9 +106,11 @@ class SynthesizerCore {
   void SetCountHook(std::function<void(const std::string&, uint64_t)> hook);
   const SynthesizerCoreOptions& options() const { return options_; }
 
-  /// Checks a pose message: all numbers finite, quaternion norm within 1e-3 of 1. False with a
-  /// reason otherwise.
-  static bool ValidPose(const msgs::pb::Pose& pose, std::string* why);
+  /// Checks a pose message by the codec's rule (msgs::ValidatePose: finite, quaternion norm
+  /// within msgs::kQuaternionTolerance of 1) and converts it once (normalised) into *out. False
+  /// with a reason naming `field` otherwise.
+  static bool ToScenePose(const msgs::pb::Pose& pose, const std::string& field, scene::Pose* out,
+                          std::string* why);
 
  private:
   struct Loaded {
@@ -133,8 +135,9 @@ class SynthesizerCore {
   /// Renders `poses` with one model in chunks of max_batch. Throws on render failure.
   std::vector<Rendered> RenderWith(Loaded* loaded, const std::vector<scene::Pose>& poses,
                                    Clock::time_point receipt);
-  void FillMeta(const Loaded& loaded, const msgs::pb::Pose& pose, const Rendered& r,
-                msgs::pb::ViewMeta* meta) const;
+  /// `pose_msg` is copied into the metadata as received; `pose` is its conversion (coverage).
+  void FillMeta(const Loaded& loaded, const msgs::pb::Pose& pose_msg, const scene::Pose& pose,
+                const Rendered& r, msgs::pb::ViewMeta* meta) const;
 
   SynthesizerCoreOptions options_;
   SynthesizerLoader loader_;

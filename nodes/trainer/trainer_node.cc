@@ -5,38 +5,13 @@
 #include <cmath>
 #include <filesystem>
 
+#include "convert/camera_info.h"
+#include "convert/rgbd_frame.h"
 #include "model/p2i_config.h"
-#include "nodes/camera/msg_convert.h"
 #include "nodes/runtime/endpoints.h"
 #include "scene/dataset_loader.h"
 
 namespace p2i::trainer {
-
-namespace {
-
-/// A decoded frame as a scene sample (copies the images; depth in metres).
-scene::RgbdSample ToSample(const msgs::RgbdFrame& frame) {
-  scene::RgbdSample s;
-  const auto& h = frame.meta.header();
-  s.stamp = h.capture_stamp_ns() * 1e-9;
-  s.id = std::to_string(h.seq());
-  if (frame.meta.has_pose()) s.pose = nodes::FromMsg(frame.meta.pose());
-  cv::Mat rgb = nodes::ToMat(frame.rgb);
-  if (rgb.type() != CV_8UC3) throw std::invalid_argument("rgb is not RGB8");
-  s.rgb = rgb.clone();
-  cv::Mat depth = nodes::ToMat(frame.depth);
-  if (depth.type() == CV_32FC1) {
-    s.depth = depth.clone();
-  } else if (depth.type() == CV_16UC1) {
-    depth.convertTo(s.depth, CV_32FC1, frame.depth.depth_scale);
-    s.depth.setTo(0.0f, depth == static_cast<uint16_t>(frame.depth.invalid_value));
-  } else {
-    throw std::invalid_argument("depth is neither DEPTH32F nor DEPTH16U");
-  }
-  return s;
-}
-
-}  // namespace
 
 TrainerNode::TrainerNode(const runtime::NodeArgs& args) : Node("trainer", args) {
   const std::string config_file =
@@ -141,8 +116,8 @@ void TrainerNode::OnFrame(const msgs::RgbdFrame& frame) {
     return;
   }
   try {
-    const scene::CameraInfo camera = nodes::FromMsg(frame.meta.camera_info());
-    if (!buffer_->Add(ToSample(frame), camera, frame.meta.has_pose())) {
+    const scene::CameraInfo camera = convert::FromMsg(frame.meta.camera_info());
+    if (!buffer_->Add(convert::ToSample(frame), camera, frame.meta.has_pose())) {
       Count("frames_without_pose");
       return;
     }

@@ -14,7 +14,8 @@
 #include <catch2/catch.hpp>
 
 #include "msgs/codec.h"
-#include "nodes/camera/msg_convert.h"
+#include "convert/image.h"
+#include "convert/pose.h"
 #include "nodes/runtime/publisher.h"
 #include "nodes/runtime/raw_publisher.h"
 #include "nodes/runtime/raw_subscriber.h"
@@ -120,7 +121,7 @@ TEST_CASE("aravis backend over GigE Vision (arv-fake-gv-camera on 127.0.0.1): fr
       const int64_t now = runtime::NowNs();
       m.mutable_header()->set_capture_stamp_ns(now);
       m.mutable_header()->set_frame_id("world");
-      ToMsg(Truth(now, t0), m.mutable_pose());
+      convert::ToMsg(Truth(now, t0), m.mutable_pose());
       pub.Publish(m);
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
     }
@@ -149,10 +150,10 @@ TEST_CASE("aravis backend over GigE Vision (arv-fake-gv-camera on 127.0.0.1): fr
     // The pose is the one at the frame's capture stamp (interpolated between two published).
     const int64_t stamp = f.meta.header().capture_stamp_ns();
     CHECK(stamp > t0);
-    const scene::Pose pose = FromMsg(f.meta.pose());
+    const scene::Pose pose = convert::FromMsg(f.meta.pose());
     INFO("stamp - t0 = " << (stamp - t0) * 1e-9 << " s; pose " << pose);
     CHECK(pose.equals(Truth(stamp, t0), 1e-6));
-    if (cv::countNonZero(ToMat(f.depth) > 0.0f) > 64 * 48 / 2) ++with_depth;
+    if (cv::countNonZero(convert::ToMat(f.depth) > 0.0f) > 64 * 48 / 2) ++with_depth;
   }
   CHECK(with_depth >= 4);
 
@@ -190,9 +191,9 @@ TEST_CASE("aravis (in-process fake) + p2i_pose_source: every frame's pose lies o
     if (!msgs::Decode(wire, &f, &error)) continue;
     CHECK(f.rgb.width == 32);
     CHECK(f.depth.encoding == msgs::pb::DEPTH32F);
-    CHECK(cv::countNonZero(ToMat(f.depth)) == 0);  // no depth device: all invalid
+    CHECK(cv::countNonZero(convert::ToMat(f.depth)) == 0);  // no depth device: all invalid
     REQUIRE(f.meta.has_pose());
-    seen.push_back(FromMsg(f.meta.pose()));
+    seen.push_back(convert::FromMsg(f.meta.pose()));
   }
   REQUIRE(seen.size() == 8);
   // pose_source publishes the orbit's poses in order (looping); a frame between two of them

@@ -6,6 +6,7 @@
 
 #include <catch2/catch.hpp>
 
+#include "convert/pose.h"
 #include "tests/msgs/samples.h"
 
 namespace p2i::msgs {
@@ -75,14 +76,15 @@ TEST_CASE("small messages round trip with all fields", "[unit]") {
 
 TEST_CASE("pose values survive the round trip", "[unit]") {
   pb::PoseStamped m;
-  SetPose({1.5, -2.25, 3.0, 0.0, 0.0, std::sqrt(0.5), std::sqrt(0.5)}, m.mutable_pose());
+  convert::SetPose({1.5, -2.25, 3.0, 0.0, 0.0, std::sqrt(0.5), std::sqrt(0.5)},
+                   m.mutable_pose());
   m.mutable_header()->set_seq(42);
   m.mutable_header()->set_capture_stamp_ns(123456789);
   m.mutable_header()->set_frame_id("world");
   pb::PoseStamped out;
   std::string error;
   REQUIRE(Decode(Encode(m), &out, &error));
-  const auto v = PoseVector(out.pose());
+  const auto v = convert::PoseVector(out.pose());
   CHECK(v[0] == 1.5);
   CHECK(v[1] == -2.25);
   CHECK(v[2] == 3.0);
@@ -148,8 +150,8 @@ TEST_CASE("RenderRequest / RenderReply round trip", "[unit]") {
   REQUIRE(Decode(Encode(req), &req_out, &error));
   REQUIRE(req_out.poses_size() == 5);
   for (int i = 0; i < 5; ++i) {
-    const auto a = PoseVector(req.poses(i));
-    const auto b = PoseVector(req_out.poses(i));
+    const auto a = convert::PoseVector(req.poses(i));
+    const auto b = convert::PoseVector(req_out.poses(i));
     for (int k = 0; k < 7; ++k) CHECK(a[k] == Approx(b[k]).margin(1e-15));
   }
 

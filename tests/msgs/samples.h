@@ -7,6 +7,7 @@
 #include <random>
 #include <string>
 
+#include "convert/pose.h"
 #include "msgs/codec.h"
 
 namespace p2i::msgs::testing {
@@ -39,9 +40,9 @@ class Samples {
       n += v * v;
     }
     n = std::sqrt(n);
-    SetPose({Uniform(-5, 5), Uniform(-5, 5), Uniform(-5, 5), q[0] / n, q[1] / n, q[2] / n,
-             q[3] / n},
-            p);
+    convert::SetPose({Uniform(-5, 5), Uniform(-5, 5), Uniform(-5, 5), q[0] / n, q[1] / n,
+                      q[2] / n, q[3] / n},
+                     p);
     p->set_parent_frame("world");
     p->set_child_frame("camera");
   }

@@ -8,6 +8,7 @@
 #include <thread>
 #include <vector>
 
+#include "convert/pose.h"
 #include "msgs/codec.h"
 #include "tests/msgs/samples.h"
 
@@ -51,7 +52,8 @@ void CheckRejected(const WireMessage& wire, DecodeReason expected, const std::st
 
 pb::PoseStamped PoseWithQuaternionScale(double scale) {
   pb::PoseStamped m;
-  SetPose({1, 2, 3, 0.5 * scale, -0.5 * scale, 0.5 * scale, 0.5 * scale}, m.mutable_pose());
+  convert::SetPose({1, 2, 3, 0.5 * scale, -0.5 * scale, 0.5 * scale, 0.5 * scale},
+                   m.mutable_pose());
   return m;
 }
 

@@ -13,7 +13,8 @@
 #include <catch2/catch.hpp>
 
 #include "msgs/codec.h"
-#include "nodes/camera/msg_convert.h"
+#include "convert/image.h"
+#include "convert/pose.h"
 #include "nodes/runtime/raw_subscriber.h"
 #include "scene/capture.h"
 #include "scene/sim_scene.h"
@@ -68,7 +69,7 @@ TEST_CASE("pose_source drives the sim camera: frames carry the published poses",
     REQUIRE(f.meta.has_pose());
     REQUIRE(f.meta.has_camera_info());
     CHECK(f.meta.camera_info().width() == 64);
-    const scene::Pose pose = FromMsg(f.meta.pose());
+    const scene::Pose pose = convert::FromMsg(f.meta.pose());
     // The camera rendered at a pose that pose_source published (a pose of the orbit).
     double best = 1e9;
     for (const scene::StampedPose& p : orbit) {
@@ -77,7 +78,7 @@ TEST_CASE("pose_source drives the sim camera: frames carry the published poses",
     }
     CHECK(best < 1e-6);
     // And the image is the scene at that pose, not a blank.
-    const cv::Mat depth = ToMat(f.depth);
+    const cv::Mat depth = convert::ToMat(f.depth);
     CHECK(cv::countNonZero(depth > 0.0f) > 64 * 48 / 2);
     seen.push_back(pose);
   }
@@ -125,7 +126,7 @@ TEST_CASE("Replay camera plays a capture folder in order with its poses, looping
     CHECK(f.rgb.height == 24);
     CHECK(f.meta.camera_info().width() == 24);
     REQUIRE(f.meta.has_pose());
-    const scene::Pose pose = FromMsg(f.meta.pose());
+    const scene::Pose pose = convert::FromMsg(f.meta.pose());
     size_t match = orbit.size();
     for (size_t i = 0; i < orbit.size(); ++i) {
       if (orbit[i].pose.equals(pose, 1e-6)) match = i;

@@ -14,7 +14,9 @@
 #include <zmq.hpp>
 
 #include "msgs/codec.h"
-#include "nodes/camera/msg_convert.h"
+#include "convert/camera_info.h"
+#include "convert/image.h"
+#include "convert/pose.h"
 #include "nodes/runtime/endpoints.h"
 #include "nodes/runtime/publisher.h"
 #include "nodes/runtime/raw_publisher.h"
@@ -110,7 +112,7 @@ TEST_CASE("launched graph: malformed messages on every topic and service are dro
     if (!feed_poses || Clock::now() - last_pose < 100ms) return;
     last_pose = Clock::now();
     msgs::pb::PoseStamped p;
-    nodes::ToMsg(sweep[pose_index++ % sweep.size()].pose, p.mutable_pose());
+    convert::ToMsg(sweep[pose_index++ % sweep.size()].pose, p.mutable_pose());
     pose.Send(pose.Valid(p));
   };
   auto wait_for = [&](const std::function<bool()>& cond, std::chrono::seconds timeout) {
@@ -151,21 +153,21 @@ TEST_CASE("launched graph: malformed messages on every topic and service are dro
   const scene::CameraInfo cam = scene::SimScene::DefaultCamera(64, 48);
   const scene::RgbdSample sample = sim.Render(sweep[3].pose, cam, 0.0);
   msgs::RgbdFrame frame;
-  nodes::ToMsg(sample.pose, frame.meta.mutable_pose());
-  frame.rgb = nodes::ToImage(sample.rgb);
-  frame.depth = nodes::ToImage(sample.depth);
-  nodes::ToMsg(cam, frame.meta.mutable_camera_info());
+  convert::ToMsg(sample.pose, frame.meta.mutable_pose());
+  frame.rgb = convert::ToImage(sample.rgb);
+  frame.depth = convert::ToImage(sample.depth);
+  convert::ToMsg(cam, frame.meta.mutable_camera_info());
   msgs::View view;
-  nodes::ToMsg(sample.pose, view.meta.mutable_pose());
+  convert::ToMsg(sample.pose, view.meta.mutable_pose());
   view.rgb = frame.rgb;
   view.depth = frame.depth;
   msgs::pb::CameraInfo info;
-  nodes::ToMsg(cam, &info);
+  convert::ToMsg(cam, &info);
   msgs::pb::PoseStamped pose_msg;
-  nodes::ToMsg(sweep[5].pose, pose_msg.mutable_pose());
+  convert::ToMsg(sweep[5].pose, pose_msg.mutable_pose());
   msgs::pb::PoseRequest request_msg;
   request_msg.set_request_id(1);
-  nodes::ToMsg(sweep[5].pose, request_msg.mutable_pose());
+  convert::ToMsg(sweep[5].pose, request_msg.mutable_pose());
   msgs::pb::ModelVersion version_msg;
   version_msg.set_version(1);
   version_msg.set_checkpoint_path("/nonexistent.pt");
@@ -218,7 +220,7 @@ TEST_CASE("launched graph: malformed messages on every topic and service are dro
   raw_options.retries = 0;
   runtime::RawServiceClient raw_client("/render", raw_options);
   msgs::pb::RenderRequest good_request;
-  nodes::ToMsg(sweep[7].pose, good_request.add_poses());
+  convert::ToMsg(sweep[7].pose, good_request.add_poses());
   Injector scratch("/scratch", "ipc://" + run + "/scratch.ipc");  // numbers the bad requests
   for (const auto& [what, w] : BadMessages(&scratch, good_request)) {
     const uint64_t before = status.Counter("/synthesizer", "request_errors");
@@ -237,7 +239,7 @@ TEST_CASE("launched graph: malformed messages on every topic and service are dro
   runtime::ServiceClient<msgs::pb::RenderRequest, msgs::RenderReplyMsg> client(
       "/render", "/pipeline_test", client_options);
   msgs::pb::RenderRequest too_many;
-  for (int i = 0; i < 17; ++i) nodes::ToMsg(sweep[i].pose, too_many.add_poses());
+  for (int i = 0; i < 17; ++i) convert::ToMsg(sweep[i].pose, too_many.add_poses());
   msgs::RenderReplyMsg reply;
   std::string error;
   REQUIRE(client.Call(too_many, &reply, &error));
@@ -280,7 +282,7 @@ TEST_CASE("launched graph: malformed messages on every topic and service are dro
       last_planned = Clock::now();
       msgs::pb::PoseRequest r;
       r.set_request_id(++request_id);
-      nodes::ToMsg(sweep[request_id % sweep.size()].pose, r.mutable_pose());
+      convert::ToMsg(sweep[request_id % sweep.size()].pose, r.mutable_pose());
       planned.Send(planned.Valid(r));
     }
     return status.Counter("/slam_sink", "frames_written") >= written_before + 3 &&

@@ -12,7 +12,7 @@
 #include <catch2/catch.hpp>
 #include <opencv2/imgcodecs.hpp>
 
-#include "nodes/camera/msg_convert.h"
+#include "convert/pose.h"
 #include "nodes/runtime/publisher.h"
 #include "nodes/runtime/raw_publisher.h"
 #include "nodes/runtime/service_client.h"
@@ -30,7 +30,7 @@ using RenderClient = runtime::ServiceClient<msgs::pb::RenderRequest, msgs::Rende
 
 msgs::pb::RenderRequest Request(const std::vector<scene::StampedPose>& sweep, size_t i, int n) {
   msgs::pb::RenderRequest r;
-  for (int k = 0; k < n; ++k) nodes::ToMsg(sweep[(i + k) % sweep.size()].pose, r.add_poses());
+  for (int k = 0; k < n; ++k) convert::ToMsg(sweep[(i + k) % sweep.size()].pose, r.add_poses());
   return r;
 }
 

@@ -16,6 +16,8 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include "convert/image.h"
+#include "convert/pose.h"
 #include "nodes/runtime/node.h"
 #include "nodes/runtime/shutdown.h"
 #include "nodes/slam_sink/message_conversion.h"
@@ -33,29 +35,16 @@ using testing::SmallCamera;
 using testing::Split;
 using testing::TempDir;
 
-msgs::Image ToImage(const cv::Mat& m) {
-  msgs::Image img = msgs::Image::Allocate(m.type() == CV_8UC3 ? msgs::pb::RGB8 : msgs::pb::DEPTH32F,
-                                          m.cols, m.rows);
-  if (m.type() == CV_32FC1) {
-    img.depth_scale = 1.0;
-    img.invalid_value = 0.0;
-  }
-  const size_t row = m.cols * m.elemSize();
-  for (int r = 0; r < m.rows; ++r) std::memcpy(img.MutableData() + r * row, m.ptr(r), row);
-  return img;
-}
-
 msgs::View ToView(const SinkFrame& f) {
   msgs::View view;
   view.meta.mutable_header()->set_capture_stamp_ns(static_cast<int64_t>(f.stamp * 1e9));
   view.meta.mutable_header()->set_frame_id("world");
-  const scene::Vector7d v = f.pose.ToVector7();
-  msgs::SetPose({v(0), v(1), v(2), v(3), v(4), v(5), v(6)}, view.meta.mutable_pose());
+  convert::ToMsg(f.pose, view.meta.mutable_pose());
   view.meta.set_coverage(f.coverage);
   view.meta.set_model_version(3);
   view.meta.set_method("sim");
-  view.rgb = ToImage(f.rgb);
-  view.depth = ToImage(f.depth);
+  view.rgb = convert::ToImage(f.rgb);
+  view.depth = convert::ToImage(f.depth);
   return view;
 }
 

@@ -16,7 +16,8 @@
 
 #include <catch2/catch.hpp>
 
-#include "nodes/camera/msg_convert.h"
+#include "convert/image.h"
+#include "convert/pose.h"
 #include "nodes/synthesizer/latest_slot.h"
 #include "nodes/synthesizer/synthesizer_core.h"
 #include "nodes/synthesizer/topic_renderer.h"
@@ -72,7 +73,7 @@ SynthesizerLoader FakeLoader(std::chrono::milliseconds render_time = {},
 
 msgs::pb::Pose PoseAtX(double x) {
   msgs::pb::Pose p;
-  ToMsg(scene::Pose(Eigen::Vector3d(x, 0.0, 1.0), Eigen::Quaterniond::Identity()), &p);
+  convert::ToMsg(scene::Pose(Eigen::Vector3d(x, 0.0, 1.0), Eigen::Quaterniond::Identity()), &p);
   return p;
 }
 
@@ -92,8 +93,8 @@ msgs::pb::RenderRequest Request(std::vector<double> xs, uint64_t id = 1) {
   return r;
 }
 
-uint8_t Red(const msgs::Image& img) { return ToMat(img).at<cv::Vec3b>(0, 0)[0]; }
-float Depth(const msgs::Image& img) { return ToMat(img).at<float>(0, 0); }
+uint8_t Red(const msgs::Image& img) { return convert::ToMat(img).at<cv::Vec3b>(0, 0)[0]; }
+float Depth(const msgs::Image& img) { return convert::ToMat(img).at<float>(0, 0); }
 
 /// Checks a reply is ok and that all its views were rendered by one model; returns its version.
 uint64_t CheckOneModel(const msgs::RenderReplyMsg& reply) {
@@ -188,9 +189,11 @@ TEST_CASE("SynthesizerCore refuses bad requests with ok=false, counts them and k
   auto nan = Request({0.0, 0.1});
   nan.mutable_poses(1)->mutable_position()->set_y(std::numeric_limits<double>::quiet_NaN());
   refused(nan, "non-finite position");
+  CHECK(reply.meta.error().find("poses[1].position is not finite") != std::string::npos);
   auto zero_q = Request({0.0});
   zero_q.mutable_poses(0)->mutable_orientation()->set_w(0.0);
   refused(zero_q, "zero quaternion");
+  CHECK(reply.meta.error().find("poses[0].orientation has norm") != std::string::npos);
   auto other_method = Request({0.0});
   other_method.set_method("warp");
   refused(other_method, "another method");

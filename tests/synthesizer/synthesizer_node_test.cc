@@ -13,7 +13,8 @@
 #include <catch2/catch.hpp>
 
 #include "msgs/codec.h"
-#include "nodes/camera/msg_convert.h"
+#include "convert/image.h"
+#include "convert/pose.h"
 #include "nodes/runtime/publisher.h"
 #include "nodes/runtime/raw_publisher.h"
 #include "nodes/runtime/raw_subscriber.h"
@@ -46,9 +47,9 @@ TEST_CASE("p2i_synthesizer serves nearest-keyframe views over the render service
                                                                                client_options);
   msgs::pb::RenderRequest request;
   request.set_request_id(5);
-  ToMsg(sweep[0].pose, request.add_poses());   // a training pose (stride 4 keeps index 0)
-  ToMsg(sweep[40].pose, request.add_poses());  // another one
-  ToMsg(scene::Pose(sweep[2].pose.translation() + Eigen::Vector3d(0.0, 0.0, 2.0),
+  convert::ToMsg(sweep[0].pose, request.add_poses());   // a training pose (stride 4 keeps index 0)
+  convert::ToMsg(sweep[40].pose, request.add_poses());  // another one
+  convert::ToMsg(scene::Pose(sweep[2].pose.translation() + Eigen::Vector3d(0.0, 0.0, 2.0),
                     sweep[2].pose.rotation()),
         request.add_poses());  // 2 m above the sweep: poorly covered
   msgs::RenderReplyMsg reply;
@@ -68,18 +69,18 @@ TEST_CASE("p2i_synthesizer serves nearest-keyframe views over the render service
     CHECK(reply.images[2 * i + 1].height == 64);
     CHECK(reply.meta.views(i).method() == "nearest");
     // A rendered office, not an empty image.
-    const cv::Mat depth = ToMat(reply.images[2 * i + 1]);
+    const cv::Mat depth = convert::ToMat(reply.images[2 * i + 1]);
     CHECK(cv::countNonZero(depth > 0.0f) > 64 * 64 / 2);
   }
   CHECK(reply.meta.views(0).coverage() == Approx(1.0));
   CHECK(reply.meta.views(1).coverage() == Approx(1.0));
   CHECK(reply.meta.views(2).coverage() < 0.5);
   // The two training poses give different frames.
-  CHECK(cv::norm(ToMat(reply.images[0]), ToMat(reply.images[2]), cv::NORM_L1) > 0.0);
+  CHECK(cv::norm(convert::ToMat(reply.images[0]), convert::ToMat(reply.images[2]), cv::NORM_L1) > 0.0);
 
   // Too many poses: refused with a reason, and the node keeps serving.
   msgs::pb::RenderRequest big;
-  for (int i = 0; i < 9; ++i) ToMsg(sweep[i].pose, big.add_poses());
+  for (int i = 0; i < 9; ++i) convert::ToMsg(sweep[i].pose, big.add_poses());
   REQUIRE(client.Call(big, &reply, &error));
   CHECK_FALSE(reply.meta.ok());
   CHECK(reply.meta.error().find("max_poses") != std::string::npos);
@@ -99,7 +100,7 @@ TEST_CASE("p2i_synthesizer serves nearest-keyframe views over the render service
   while (!got && std::chrono::steady_clock::now() < deadline) {
     msgs::pb::PoseRequest pr;
     pr.set_request_id(77);
-    ToMsg(sweep[8].pose, pr.mutable_pose());
+    convert::ToMsg(sweep[8].pose, pr.mutable_pose());
     planned.Publish(pr);  // repeated until the subscription has joined
     msgs::WireMessage wire;
     msgs::pb::Header header;

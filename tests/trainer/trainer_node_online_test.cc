@@ -6,7 +6,9 @@
 #include <filesystem>
 #include <fstream>
 
-#include "nodes/camera/msg_convert.h"
+#include "convert/camera_info.h"
+#include "convert/image.h"
+#include "convert/pose.h"
 #include "nodes/runtime/shutdown.h"
 #include "nodes/trainer/trainer_node.h"
 #include "tests/runtime/test_util.h"
@@ -47,10 +49,10 @@ TEST_CASE("TrainerNode online: posed frames fill the buffer, pose-less ones are 
            (Counter(node, "frames_accepted") < 5 || Counter(node, "frames_without_pose") < 1)) {
       const auto& f = sim.frames[i % sim.frames.size()];
       msgs::RgbdFrame m;
-      nodes::ToMsg(sim.camera, m.meta.mutable_camera_info());
-      if (i % 3 != 2) nodes::ToMsg(f.pose, m.meta.mutable_pose());
-      m.rgb = nodes::ToImage(f.rgb);
-      m.depth = nodes::ToImage(f.depth);
+      convert::ToMsg(sim.camera, m.meta.mutable_camera_info());
+      if (i % 3 != 2) convert::ToMsg(f.pose, m.meta.mutable_pose());
+      m.rgb = convert::ToImage(f.rgb);
+      m.depth = convert::ToImage(f.depth);
       pub->Publish(m);
       ++i;
       for (int k = 0; k < 5; ++k) {
