@@ -5,26 +5,29 @@
 #include <cstring>
 #include <limits>
 #include <stdexcept>
+#include <vector>
 
 #include <catch2/catch.hpp>
 
 namespace p2i::convert {
 namespace {
 
-msgs::Image Depth16(const std::vector<uint16_t>& v, int w, double scale, double invalid) {
-  msgs::Image img = msgs::Image::Allocate(msgs::pb::DEPTH16U, w, v.size() / w);
+template <class T>
+msgs::Image DepthImage(msgs::Encoding encoding, const std::vector<T>& v, int w, double scale,
+                       double invalid) {
+  msgs::Image img = msgs::Image::Allocate(encoding, w, v.size() / w);
   img.depth_scale = scale;
   img.invalid_value = invalid;
-  std::memcpy(img.MutableData(), v.data(), v.size() * sizeof(uint16_t));
+  std::memcpy(img.MutableData(), v.data(), v.size() * sizeof(T));
   return img;
 }
 
+msgs::Image Depth16(const std::vector<uint16_t>& v, int w, double scale, double invalid) {
+  return DepthImage(msgs::pb::DEPTH16U, v, w, scale, invalid);
+}
+
 msgs::Image Depth32(const std::vector<float>& v, int w, double scale, double invalid) {
-  msgs::Image img = msgs::Image::Allocate(msgs::pb::DEPTH32F, w, v.size() / w);
-  img.depth_scale = scale;
-  img.invalid_value = invalid;
-  std::memcpy(img.MutableData(), v.data(), v.size() * sizeof(float));
-  return img;
+  return DepthImage(msgs::pb::DEPTH32F, v, w, scale, invalid);
 }
 
 TEST_CASE("DEPTH16U: metres = value x depth_scale, the invalid value and 0 give 0", "[unit]") {
