@@ -6,10 +6,13 @@
 #include <cstdlib>
 #include <ctime>
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <vector>
 
+#include "nodes/runtime/peer_registry.h"
 #include "tools/command.h"
+#include "tools/launch_machine.h"
 #include "tools/launch_command.h"
 #include "tools/launch_description.h"
 #include "tools/launch_runner.h"
@@ -32,6 +35,8 @@ constexpr const char* kUsage =
     "  --run-dir DIR          P2I_RUN_DIR for the nodes (default: $P2I_RUN_DIR, else a fresh\n"
     "                         /tmp/p2i-$UID/launch-<pid>, removed at exit)\n"
     "  --log-dir DIR          folder of <node>.log for nodes with output: log|both\n"
+    "  --machine NAME         multi-host files: start only the nodes of `machine` NAME\n"
+    "                         (default: the machine whose address is this host's)\n"
     "  -h, --help             this text\n";
 
 struct Options {
@@ -42,6 +47,7 @@ struct Options {
   double grace_period = 5.0;
   std::string run_dir;
   std::string log_dir;
+  std::string machine;
 };
 
 // Returns -1 when parsing succeeded, else the exit code to return.
@@ -70,6 +76,8 @@ int ParseArgs(const std::vector<std::string>& args, Options* o) {
       o->run_dir = value("--run-dir");
     } else if (a == "--log-dir") {
       o->log_dir = value("--log-dir");
+    } else if (a == "--machine") {
+      o->machine = value("--machine");
     } else if (a.find(":=") != std::string::npos) {
       o->overrides.push_back(a);
     } else if (!a.empty() && a[0] == '-') {
@@ -122,8 +130,16 @@ int RunLaunch(const std::vector<std::string>& args) {
   if (parse >= 0) return parse;
   if (o.show_args) return ShowArgs(o.file);
 
-  const LaunchDescription description =
+  LaunchDescription description =
       LaunchDescriptionReader::ReadFile(o.file, ParseLaunchOverrides(o.overrides));
+  // Multi-host files: only this machine's part, wired to the other machines' registries.
+  const MachinePlan plan = PlanMachine(description, o.machine);
+  if (plan.multi_host) {
+    std::fprintf(stderr, "[launch] machine %s (%s): %zu of %zu nodes; peers %s\n",
+                 plan.self.name.c_str(), plan.self.address.c_str(), plan.nodes.size(),
+                 description.nodes.size(), plan.PeersText().c_str());
+    description.nodes = plan.nodes;
+  }
   if (description.nodes.empty()) {
     std::fprintf(stderr, "[launch] %s starts no nodes\n", o.file.c_str());
     return 0;
@@ -210,8 +226,16 @@ int RunLaunch(const std::vector<std::string>& args) {
   fs::permissions(run_dir, fs::perms::owner_all, fs::perm_options::replace);
   ::setenv("P2I_RUN_DIR", run_dir.c_str(), 1);
   std::fprintf(stderr, "[launch] P2I_RUN_DIR=%s%s\n", run_dir.c_str(),
-               own_run_dir ? " (export it to use `p2i topic` with this launch)" : "");
+               own_run_dir ? " (`p2i topic` finds it; export it to look at this launch only)" : "");
 
+  std::unique_ptr<runtime::RegistryServer> registry_server;
+  if (plan.multi_host) {
+    ::setenv("P2I_HOST_ADDRESS", plan.self.address.c_str(), 1);
+    ::setenv("P2I_PEERS", plan.PeersText().c_str(), 1);
+    registry_server = std::make_unique<runtime::RegistryServer>(plan.self.RegistryEndpoint());
+    std::fprintf(stderr, "[launch] registry of this host at %s\n",
+                 registry_server->Endpoint().c_str());
+  }
   LaunchRunnerOptions runner_options;
   runner_options.grace_period = o.grace_period;
   runner_options.log_dir = !o.log_dir.empty()

@@ -9,13 +9,17 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include <CLI/CLI.hpp>
 
 #include "msgs/codec.h"
 #include "nodes/runtime/endpoints.h"
+#include "nodes/runtime/peer_registry.h"
+#include "nodes/runtime/publisher.h"
 #include "nodes/runtime/rate_window.h"
 #include "nodes/runtime/raw_subscriber.h"
 #include "nodes/runtime/shutdown.h"
@@ -31,25 +35,41 @@ std::string Absolute(const std::string& topic) {
   return topic.empty() || topic[0] == '/' ? topic : "/" + topic;
 }
 
-/// Endpoints of all live publishers of `topic` (several nodes may publish one topic on
-/// different endpoints), or the default one.
-std::vector<std::string> FindEndpoints(const std::string& topic) {
-  std::vector<std::string> out;
-  for (const auto& e : Registry::List()) {
-    if (e.kind == "topic" && e.name == topic) out.push_back(e.endpoint);
+/// Where to look: $P2I_RUN_DIR when set, else every running launch of this user (as
+/// `ros2 topic list` needs nothing exported); plus the peers (--peer, else $P2I_PEERS).
+struct Graph {
+  std::vector<std::string> peers;
+  std::vector<RegistryEntry> Entries() const {
+    const char* env = std::getenv("P2I_RUN_DIR");
+    const std::vector<std::string> dirs =
+        env && *env ? std::vector<std::string>{runtime::RunDir()} : Registry::UserRunDirs();
+    std::vector<std::string> errors;
+    auto entries = runtime::ListGraph(dirs, peers, std::chrono::milliseconds(1000), &errors);
+    for (const auto& e : errors) std::fprintf(stderr, "p2i topic: warning: %s\n", e.c_str());
+    return entries;
   }
+};
+
+/// Endpoints of all live publishers of `topic` here and on the peers (several nodes may
+/// publish one topic on different endpoints), or the default one.
+std::vector<std::string> FindEndpoints(const Graph& graph, const std::string& topic) {
+  std::vector<std::string> out = runtime::ReachableEndpoints(graph.Entries(), "topic", topic);
   if (out.empty()) out.push_back(runtime::DefaultEndpoint("topic", topic));
   return out;
 }
 
-int List(bool show_types, bool verbose) {
-  const auto entries = Registry::List();
+int List(const Graph& graph, bool show_types, bool verbose) {
+  auto entries = graph.Entries();
+  std::sort(entries.begin(), entries.end(), [](const RegistryEntry& a, const RegistryEntry& b) {
+    return std::tie(a.kind, a.name, a.node, a.host) < std::tie(b.kind, b.name, b.node, b.host);
+  });
   std::vector<std::string> printed;
   for (const auto& e : entries) {
     if (e.kind != "topic" && !verbose) continue;
     if (verbose) {
-      std::printf("%-8s %-40s [%s] %s (node %s, pid %d)\n", e.kind.c_str(), e.name.c_str(),
-                  e.type.c_str(), e.endpoint.c_str(), e.node.c_str(), e.pid);
+      std::printf("%-8s %-40s [%s] %s (node %s, pid %d%s%s)\n", e.kind.c_str(), e.name.c_str(),
+                  e.type.c_str(), e.endpoint.c_str(), e.node.c_str(), e.pid,
+                  e.host.empty() ? "" : ", via ", e.host.c_str());
       continue;
     }
     const std::string line = show_types ? e.name + " [" + e.type + "]" : e.name;
@@ -60,10 +80,12 @@ int List(bool show_types, bool verbose) {
   return 0;
 }
 
+std::vector<std::string> g_peers;  // --peer / $P2I_PEERS, set by RunTopic
+
 runtime::SubscriberOptions SubOptions(const std::string& topic,
                                       const std::vector<std::string>& endpoints) {
   runtime::SubscriberOptions o;
-  o.endpoints = endpoints.empty() ? FindEndpoints(topic) : endpoints;
+  o.endpoints = endpoints.empty() ? FindEndpoints(Graph{g_peers}, topic) : endpoints;
   return o;
 }
 
@@ -133,11 +155,85 @@ int Hz(const std::string& topic, const std::vector<std::string>& endpoints, size
   return 0;
 }
 
+/// `delay` (receipt time minus the header's publish stamp; hosts must share a clock, as on one
+/// machine or between network namespaces) and `bw` (bytes per second), like `ros2 topic
+/// delay/bw`, printed once a second; a summary line at the end for scripts.
+int DelayOrBw(bool delay, const std::string& topic, const std::vector<std::string>& endpoints,
+              double duration_s) {
+  runtime::RawSubscriber sub(topic, SubOptions(topic, endpoints));
+  using Clock = std::chrono::steady_clock;
+  const auto start = Clock::now();
+  auto next_report = start + std::chrono::seconds(1);
+  std::vector<double> values;  // delay s, or message bytes
+  std::vector<double> all;
+  double first_t = -1, last_t = -1;
+  while (!runtime::Shutdown::Requested()) {
+    const auto now = Clock::now();
+    if (duration_s > 0 && now - start >= std::chrono::duration<double>(duration_s)) break;
+    msgs::WireMessage m;
+    msgs::pb::Header h;
+    if (sub.Receive(&m, &h, std::chrono::milliseconds(50))) {
+      const double t = std::chrono::duration<double>(Clock::now() - start).count();
+      if (first_t < 0) first_t = t;
+      last_t = t;
+      const double v = delay ? (runtime::NowNs() - static_cast<int64_t>(h.publish_stamp_ns())) * 1e-9
+                             : static_cast<double>(msgs::WireSize(m));
+      values.push_back(v);
+      all.push_back(v);
+    }
+    if (Clock::now() < next_report) continue;
+    next_report += std::chrono::seconds(1);
+    if (values.empty()) {
+      std::printf("no new messages\n");
+    } else {
+      double sum = 0, mn = values[0], mx = values[0];
+      for (double v : values) sum += v, mn = std::min(mn, v), mx = std::max(mx, v);
+      const double mean = sum / values.size();
+      double var = 0;
+      for (double v : values) var += (v - mean) * (v - mean);
+      if (delay) {
+        std::printf("average delay: %.3f ms\n\tmin: %.3f ms max: %.3f ms std dev: %.3f ms "
+                    "window: %zu\n", mean * 1e3, mn * 1e3, mx * 1e3,
+                    std::sqrt(var / values.size()) * 1e3, values.size());
+      } else {
+        std::printf("%.2f MB/s from %zu messages\n\tMessage size mean: %.2f MB min: %.2f MB "
+                    "max: %.2f MB\n", sum / 1e6, values.size(), mean / 1e6, mn / 1e6, mx / 1e6);
+      }
+      values.clear();
+    }
+    std::fflush(stdout);
+  }
+  if (!all.empty()) {
+    std::vector<double> sorted = all;
+    std::sort(sorted.begin(), sorted.end());
+    double sum = 0;
+    for (double v : all) sum += v;
+    const double span = last_t - first_t;
+    if (delay) {
+      std::printf("summary: %zu messages, delay p50 %.3f ms p99 %.3f ms max %.3f ms\n",
+                  all.size(), sorted[sorted.size() / 2] * 1e3,
+                  sorted[std::min(sorted.size() - 1, sorted.size() * 99 / 100)] * 1e3,
+                  sorted.back() * 1e3);
+    } else {
+      std::printf("summary: %zu messages, %.2f MB, %.2f MB/s, %.1f messages/s\n", all.size(),
+                  sum / 1e6, span > 0 ? (sum - all.front()) / span / 1e6 : 0.0,
+                  span > 0 ? (all.size() - 1) / span : 0.0);
+    }
+  }
+  return all.empty() ? 1 : 0;
+}
+
 int RunTopic(const std::vector<std::string>& args) {
   CLI::App app{"Inspect topics of running nodes (like `ros2 topic`). Topics are discovered "
-               "from $P2I_RUN_DIR/registry (see docs/RUNTIME.md).",
+               "from $P2I_RUN_DIR/registry, else from every running launch of this user, and "
+               "from the registries of other hosts (--peer, $P2I_PEERS; docs/MULTIHOST.md).",
                "p2i topic"};
   app.require_subcommand(1);
+  {
+    const auto env = runtime::PeerRegistries();
+    g_peers = env;
+  }
+  std::vector<std::string> peers;
   bool show_types = false, verbose = false;
   auto* list = app.add_subcommand("list", "List the topics of running nodes");
   list->add_flag("-t,--show-types", show_types, "Also print each topic's message type");
@@ -163,6 +259,18 @@ int RunTopic(const std::vector<std::string>& args) {
   hz->add_option("-w,--window", window, "Number of periods in the statistics window");
   hz->add_option("--endpoint", endpoints, "Connect here instead of the discovered endpoint");
   hz->add_option("--duration", duration_s, "Stop after S seconds (0 = until Ctrl-C)");
+  auto* delay = app.add_subcommand("delay", "Print the delay from publication to receipt");
+  auto* bw = app.add_subcommand("bw", "Print the bandwidth used by a topic");
+  for (auto* sub : {list, echo, hz, delay, bw}) {
+    sub->add_option("--peer", peers,
+                    "Registry of another host's launch, tcp://ADDRESS:PORT (repeatable; "
+                    "default $P2I_PEERS)");
+  }
+  for (auto* sub : {delay, bw}) {
+    sub->add_option("topic", topic, "Topic name (absolute, or relative to /)")->required();
+    sub->add_option("--endpoint", endpoints, "Connect here instead of the discovered endpoint");
+    sub->add_option("--duration", duration_s, "Stop after S seconds (0 = until Ctrl-C)");
+  }
 
   std::vector<std::string> rest(args.rbegin(), args.rend() - 1);  // CLI11 wants them reversed
   try {
@@ -171,13 +279,16 @@ int RunTopic(const std::vector<std::string>& args) {
     return app.exit(e);
   }
   runtime::Shutdown::InstallSignalHandlers();
-  if (list->parsed()) return List(show_types, verbose);
+  if (!peers.empty()) g_peers = peers;
+  if (list->parsed()) return List(Graph{g_peers}, show_types, verbose);
+  if (delay->parsed() || bw->parsed())
+    return DelayOrBw(delay->parsed(), Absolute(topic), endpoints, duration_s);
   if (echo->parsed()) return Echo(Absolute(topic), endpoints, once ? 1 : count, timeout_s);
   return Hz(Absolute(topic), endpoints, window, duration_s);
 }
 
 }  // namespace
 
-P2I_COMMAND("topic", "Inspect topics: list | echo TOPIC | hz TOPIC", RunTopic);
+P2I_COMMAND("topic", "Inspect topics: list | echo | hz | delay | bw TOPIC", RunTopic);
 
 }  // namespace p2i::tools

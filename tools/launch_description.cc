@@ -89,6 +89,7 @@ class Reader {
                           "; see `p2i launch " + path + " --show-args`)");
       }
     }
+    CheckMachines();
     out_.top_level_vars = top_vars_;
     return std::move(out_);
   }
@@ -145,10 +146,12 @@ class Reader {
         *ns = Namespace(body, "namespace", scope, *ns, kind);
       } else if (kind == "node") {
         ReadNode(body, kv.first, scope, *ns);
+      } else if (kind == "machine") {
+        ReadMachine(body, kv.first, scope);
       } else {
         Fail(file, kv.first, kind,
              "unknown launch entity (supported: arg, let, include, group, node, "
-             "push-ros-namespace)");
+             "machine, push-ros-namespace)");
       }
     }
   }
@@ -242,7 +245,7 @@ class Reader {
     const std::string& file = scope.file;
     CheckKeys(body, file, "node",
               {"pkg", "exec", "name", "namespace", "param", "remap", "args", "respawn",
-               "respawn_delay", "output", "required"});
+               "respawn_delay", "output", "required", "machine"});
     NodeDescription node;
     node.source = Where(file, key);  // the `node:` line
     if (body["pkg"]) node.pkg = Text(body, "pkg", scope, "node", true);
@@ -305,6 +308,7 @@ class Reader {
         Fail(file, body["args"], "args", e.what());
       }
     }
+    if (body["machine"]) node.machine = Text(body, "machine", scope, "node", false);
     if (body["respawn"]) node.respawn = Bool(body, "respawn", scope);
     if (body["required"]) node.required = Bool(body, "required", scope);
     if (body["respawn_delay"]) {
@@ -337,6 +341,47 @@ class Reader {
                "); give each node a distinct `name:` or `namespace:`");
     }
     out_.nodes.push_back(std::move(node));
+  }
+
+  void ReadMachine(const YAML::Node& body, const YAML::Node& key, const SubstitutionScope& scope) {
+    const std::string& file = scope.file;
+    CheckKeys(body, file, "machine", {"name", "address", "discovery_port"});
+    MachineDescription m;
+    m.source = Where(file, key);
+    m.name = Text(body, "name", scope, "machine", false);
+    if (!IsIdentifier(m.name)) Fail(file, body["name"], "name", "'" + m.name + "' is no name");
+    m.address = Text(body, "address", scope, "machine", false);
+    if (m.address.find_first_of(" /:\t") != std::string::npos)
+      Fail(file, body["address"], "address", "'" + m.address + "' must be a host address such "
+           "as 10.0.0.2 (no scheme, no port: the port is discovery_port)");
+    if (body["discovery_port"]) {
+      const std::string t = Text(body, "discovery_port", scope, "machine", false);
+      char* end = nullptr;
+      const long port = std::strtol(t.c_str(), &end, 10);
+      if (end == t.c_str() || *end != '\0' || port < 1 || port > 65535)
+        Fail(file, body["discovery_port"], "discovery_port", "'" + t + "' must be a port 1-65535");
+      m.discovery_port = static_cast<int>(port);
+    }
+    for (const auto& other : out_.machines)
+      if (other.name == m.name)
+        Fail(file, body["name"], "name", "a second machine '" + m.name + "' (the first is at " +
+             other.source + ")");
+    out_.machines.push_back(m);
+  }
+
+  void CheckMachines() const {
+    std::set<std::string> names;
+    for (const auto& m : out_.machines) names.insert(m.name);
+    for (const auto& n : out_.nodes) {
+      if (n.machine.empty() && !names.empty())
+        throw LaunchError(n.source + ": node '" + n.DisplayName() + "' names no `machine:` but "
+                          "the launch file declares machines (" + Join(names) + "); give it one");
+      if (!n.machine.empty() && names.count(n.machine) == 0)
+        throw LaunchError(n.source + ": node '" + n.DisplayName() + "': machine '" + n.machine +
+                          "' is not declared (declared: " +
+                          (names.empty() ? std::string("none") : Join(names)) +
+                          "; add `- machine: {name: " + n.machine + ", address: ...}`)");
+    }
   }
 
   // --- small helpers -------------------------------------------------------------------------

@@ -33,6 +33,7 @@ struct NodeDescription {
   double respawn_delay = 0.0;  ///< seconds
   std::string output = "screen";  ///< screen | log | both
   bool required = false;
+  std::string machine;         ///< `machine:` name (multi-host launch files), "" = none
   std::string source;          ///< "FILE:LINE" of the `node:` entry, for messages
 
   /// The name used in output prefixes and messages: `name`, else `exec`.
@@ -48,9 +49,21 @@ struct LaunchArgument {
   std::string source;  ///< "FILE:LINE"
 };
 
+/// One `machine` entity (as roslaunch's <machine>): a host of a multi-host graph.
+struct MachineDescription {
+  std::string name;
+  std::string address;         ///< IP address (or name) other hosts reach it at
+  int discovery_port = 7411;   ///< its launcher's registry server: tcp://address:port
+  std::string source;          ///< "FILE:LINE"
+  std::string RegistryEndpoint() const {
+    return "tcp://" + address + ":" + std::to_string(discovery_port);
+  }
+};
+
 /// Everything a launch file (and its includes) asks for.
 struct LaunchDescription {
   std::vector<NodeDescription> nodes;        ///< in file order, includes expanded in place
+  std::vector<MachineDescription> machines;  ///< `machine` entities; every node then names one
   std::vector<LaunchArgument> arguments;     ///< every `arg` met, top file first
   std::map<std::string, std::string> top_level_vars;  ///< variables of the top file at its end
 };

@@ -44,6 +44,15 @@ std::string RunDir() {
   const char* env = std::getenv("P2I_RUN_DIR");
   std::string dir = env && *env ? env : "/tmp/p2i-" + std::to_string(getuid());
   MakeDirs(dir);
+  // ipc:// sockets are not encrypted: only the user may reach them (docs/SECURITY.md).
+  struct stat st {};
+  if (::stat(dir.c_str(), &st) == 0 && (st.st_mode & 077) != 0) {
+    if (st.st_uid != ::getuid() || ::chmod(dir.c_str(), 0700) != 0) {
+      throw std::runtime_error("run directory " + dir + " (P2I_RUN_DIR) is open to other users "
+                               "and cannot be made 0700 (owner uid " + std::to_string(st.st_uid) +
+                               "): point P2I_RUN_DIR at a directory of your own");
+    }
+  }
   return dir;
 }
 
@@ -69,6 +78,7 @@ std::string Registry::Register(const RegistryEntry& e) {
     if (!out) return "";
     out << "kind " << e.kind << "\nname " << e.name << "\ntype " << e.type << "\nendpoint "
         << e.endpoint << "\nnode " << e.node << "\npid " << getpid() << "\n";
+    if (!e.remote_endpoint.empty()) out << "remote " << e.remote_endpoint << "\n";
   }
   if (std::rename(tmp.c_str(), path.c_str()) != 0) return "";
   return path;
@@ -90,9 +100,28 @@ void Registry::CheckEndpointFree(const std::string& endpoint, const std::string&
   }
 }
 
-std::vector<RegistryEntry> Registry::List() {
+std::vector<RegistryEntry> Registry::List() { return ListDir(RunDir()); }
+
+std::vector<std::string> Registry::UserRunDirs() {
+  const std::string base = "/tmp/p2i-" + std::to_string(getuid());
+  std::vector<std::string> out = {base};
+  if (DIR* d = opendir(base.c_str())) {
+    while (dirent* ent = readdir(d)) {
+      const std::string name = ent->d_name;
+      struct stat st {};
+      const std::string dir = base + "/" + name;
+      if (name.rfind("launch-", 0) == 0 && ::stat((dir + "/registry").c_str(), &st) == 0)
+        out.push_back(dir);
+    }
+    closedir(d);
+  }
+  std::sort(out.begin() + 1, out.end());
+  return out;
+}
+
+std::vector<RegistryEntry> Registry::ListDir(const std::string& run_dir) {
   std::vector<RegistryEntry> out;
-  const std::string dir = RunDir() + "/registry";
+  const std::string dir = run_dir + "/registry";
   DIR* d = opendir(dir.c_str());
   if (!d) return out;
   while (dirent* ent = readdir(d)) {
@@ -112,6 +141,7 @@ std::vector<RegistryEntry> Registry::List() {
       else if (key == "endpoint") e.endpoint = value;
       else if (key == "node") e.node = value;
       else if (key == "pid") e.pid = std::atoi(value.c_str());
+      else if (key == "remote") e.remote_endpoint = value;
     }
     if (e.pid <= 0 || (kill(e.pid, 0) != 0 && errno == ESRCH)) {
       std::remove(path.c_str());  // its process is gone

@@ -26,6 +26,11 @@ struct RegistryEntry {
   std::string endpoint;  ///< bound endpoint (the actual one, also for tcp://*:0)
   std::string node;      ///< full node name
   int pid = 0;
+  /// Multi-host graphs: the tcp endpoint the same socket also bound on $P2I_HOST_ADDRESS for
+  /// other hosts ("" when none; see peer_registry.h).
+  std::string remote_endpoint;
+  /// Where the entry was found: "" = this host's run dir, else the peer registry endpoint.
+  std::string host;
 };
 
 /// Process-level registry helpers. Thread-safe (file operations only).
@@ -41,6 +46,11 @@ class Registry {
   static void CheckEndpointFree(const std::string& endpoint, const std::string& what);
   /// All live entries (pid still running), sorted by kind and name.
   static std::vector<RegistryEntry> List();
+  /// The same for the registry of another run dir.
+  static std::vector<RegistryEntry> ListDir(const std::string& run_dir);
+  /// Run dirs of this user's running launches: /tmp/p2i-$UID and each /tmp/p2i-$UID/launch-*
+  /// with a registry (what `p2i topic` reads when $P2I_RUN_DIR is not set).
+  static std::vector<std::string> UserRunDirs();
 };
 
 }  // namespace p2i::runtime

@@ -6,6 +6,7 @@
 
 #include <spdlog/sinks/stdout_color_sinks.h>
 
+#include "nodes/runtime/curve_auth.h"
 #include "nodes/runtime/shutdown.h"
 
 namespace p2i::runtime {
@@ -35,6 +36,7 @@ Node::Node(const std::string& default_name, const NodeArgs& args)
   logger_ = std::make_shared<spdlog::logger>(FullName(), sink);
   logger_->set_pattern("[%H:%M:%S.%e] [%^%l%$] [%n] %v");
   logger_->flush_on(spdlog::level::warn);
+  CurveSecurity::SetLogger(logger_);  // refused peers appear in this node's log
 
   const std::string level = Declare<std::string>(
       "log_level", "info", "log level: trace, debug, info, warn, error");
@@ -53,6 +55,11 @@ Node::Node(const std::string& default_name, const NodeArgs& args)
       "endpoint per topic/service name (as written or resolved), e.g. {rgbd: "
       "tcp://127.0.0.1:5555}; default ipc:// under $P2I_RUN_DIR");
   if (latch_period_s_ <= 0) throw StartupError("parameter 'latch_period' must be > 0");
+  peers_ = PeerRegistries();
+  pools_ = Declare<std::map<std::string, std::string>>(
+      "pool", {},
+      "serve these services as a worker of a pool broker (nodes/pool): service name -> the "
+      "broker's backend endpoint ('' = its default ipc endpoint), e.g. {render: ''}");
 }
 
 Node::~Node() { Close(); }
@@ -79,9 +86,21 @@ std::shared_ptr<RawSubscriber> Node::SubscribeRaw(const std::string& topic,
                                                   SubscriberOptions options) {
   const std::string resolved = Resolve(topic);
   if (options.endpoints.empty()) options.endpoints = SplitCommas(EndpointFor(topic, resolved));
+  const bool discover = options.endpoints.empty() && !peers_.empty();
   auto sub = std::make_shared<RawSubscriber>(resolved, options);
   subscribers_.push_back(sub);
   RawSubscriber* raw = sub.get();
+  if (discover) {  // multi-host launch: also connect to publishers the peers list
+    if (!watcher_) watcher_ = std::make_unique<PeerWatcher>(peers_, std::chrono::milliseconds(500));
+    watcher_->Watch("topic", resolved, [this, raw](const std::vector<std::string>& eps) {
+      executor_.Post([this, raw, eps] {
+        for (const auto& ep : eps) {
+          raw->Connect(ep);
+          logger_->info("subscribed to {} at {} (found on a peer)", raw->Topic(), ep);
+        }
+      });
+    });
+  }
   executor_.AddSocket(&sub->Socket(), [this, raw, handler] {
     const uint64_t malformed_before = raw->Stats().malformed.load();
     raw->Drain(handler);
@@ -100,8 +119,16 @@ std::shared_ptr<RawServiceServer> Node::ServeRaw(const std::string& name,
                                                  ServiceServerOptions options) {
   const std::string resolved = Resolve(name);
   if (options.endpoint.empty()) options.endpoint = EndpointFor(name, resolved);
+  auto pool = pools_.find(resolved);
+  if (pool == pools_.end()) pool = pools_.find(name);
+  if (pool != pools_.end() && options.worker_of.empty())
+    options.worker_of = pool->second.empty() ? DefaultEndpoint("pool", resolved) : pool->second;
   auto server = std::make_shared<RawServiceServer>(resolved, type_name, FullName(), options,
                                                    std::move(handler));
+  if (!options.worker_of.empty()) {
+    executor_.AddTimer(std::chrono::seconds(1), [raw = server.get()] { raw->Heartbeat(); });
+    logger_->info("serving {} as a worker of the pool at {}", resolved, options.worker_of);
+  }
   servers_.push_back(server);
   RawServiceServer* raw = server.get();
   executor_.AddSocket(&server->Socket(), [this, raw] {
@@ -162,6 +189,7 @@ void Node::Close() {
     status.set_alive(false);
     status_pub_->Publish(status);  // last word: subscribers see the node go away
   }
+  watcher_.reset();  // stops its thread before the subscribers it posts to go away
   for (auto& s : subscribers_) executor_.RemoveSocket(&s->Socket());
   for (auto& s : servers_) executor_.RemoveSocket(&s->Socket());
   subscribers_.clear();
@@ -212,6 +240,12 @@ msgs::pb::NodeStatus Node::MakeStatus() const {
   c["duplicates"] = duplicates;
   c["requests"] = requests;
   c["request_errors"] = request_errors;
+  const CurveStats& curve = CurveSecurity::Stats();  // process-wide (docs/SECURITY.md)
+  if (curve.accepted.load() + curve.refused_key.load() + curve.refused_handshake.load() > 0) {
+    c["curve_accepted"] = curve.accepted.load();
+    c["curve_refused_key"] = curve.refused_key.load();
+    c["curve_refused_handshake"] = curve.refused_handshake.load();
+  }
   std::lock_guard<std::mutex> lock(counters_mutex_);
   for (const auto& [k, v] : counters_) c[k] = v;
   for (const auto& [k, v] : values_) (*s.mutable_values())[k] = v;

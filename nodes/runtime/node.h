@@ -17,6 +17,7 @@
 #include "nodes/runtime/names.h"
 #include "nodes/runtime/node_args.h"
 #include "nodes/runtime/parameters.h"
+#include "nodes/runtime/peer_registry.h"
 #include "nodes/runtime/publisher.h"
 #include "nodes/runtime/raw_publisher.h"
 #include "nodes/runtime/raw_service.h"
@@ -143,6 +144,12 @@ class Node {
                                                  ServiceClientOptions options = {}) {
     const std::string resolved = Resolve(name);
     if (options.endpoint.empty()) options.endpoint = EndpointFor(name, resolved);
+    if (options.endpoint.empty() && !peers_.empty() && !options.resolver) {
+      // Multi-host launch: the server may be on another host (found on every reconnect).
+      options.resolver = [resolved, peers = peers_] {
+        return FindServiceEndpoint(resolved, peers, std::chrono::milliseconds(300));
+      };
+    }
     return std::make_unique<ServiceClient<Req, Rep>>(resolved, FullName(), options);
   }
 
@@ -184,6 +191,9 @@ class Node {
   std::shared_ptr<spdlog::logger> logger_;
   Executor executor_;
   std::map<std::string, std::string> endpoints_;
+  std::vector<std::string> peers_;        ///< $P2I_PEERS (multi-host launch)
+  std::map<std::string, std::string> pools_;  ///< `pool` parameter: service -> broker backend
+  std::unique_ptr<PeerWatcher> watcher_;  ///< finds remote publishers of subscribed topics
   double status_period_s_ = 1.0;
   double latch_period_s_ = 1.0;
   bool started_ = false;

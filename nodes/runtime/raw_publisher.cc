@@ -4,7 +4,9 @@
 
 #include <stdexcept>
 
+#include "nodes/runtime/curve_auth.h"
 #include "nodes/runtime/endpoints.h"
+#include "nodes/runtime/peer_registry.h"
 #include "nodes/runtime/wire_io.h"
 #include "nodes/runtime/zmq_context.h"
 
@@ -23,6 +25,7 @@ RawPublisher::RawPublisher(std::string resolved_topic, std::string type_name,
   if (options_.kernel_buffer_bytes > 0) {
     socket_.set(zmq::sockopt::sndbuf, options_.kernel_buffer_bytes);
   }
+  CurveSecurity::Apply(socket_, endpoint_, options_.bind, "publisher of topic '" + topic_ + "'");
   try {
     if (options_.bind) {
       Registry::CheckEndpointFree(endpoint_, "publisher of topic '" + topic_ + "'");
@@ -38,7 +41,11 @@ RawPublisher::RawPublisher(std::string resolved_topic, std::string type_name,
                              "topic's endpoint parameter)");
   }
   if (options_.bind) {
-    registry_path_ = Registry::Register({"topic", topic_, type_name_, endpoint_, node_name, 0});
+    RegistryEntry entry{"topic", topic_, type_name_, endpoint_, node_name, 0, "", ""};
+    // Multi-host launch: a default endpoint is also bound on this host's address.
+    if (options_.endpoint.empty())
+      entry.remote_endpoint = BindHostEndpoint(socket_, "publisher of topic '" + topic_ + "'");
+    registry_path_ = Registry::Register(entry);
   }
 }
 

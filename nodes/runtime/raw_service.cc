@@ -6,7 +6,9 @@
 #include <random>
 #include <stdexcept>
 
+#include "nodes/runtime/curve_auth.h"
 #include "nodes/runtime/endpoints.h"
+#include "nodes/runtime/peer_registry.h"
 #include "nodes/runtime/shutdown.h"
 #include "nodes/runtime/wire_io.h"
 #include "nodes/runtime/zmq_context.h"
@@ -38,13 +40,27 @@ RawServiceServer::RawServiceServer(std::string resolved_name, std::string type_n
     : name_(std::move(resolved_name)),
       options_(std::move(options)),
       handler_(std::move(handler)),
-      socket_(ZmqContext(), zmq::socket_type::router) {
-  endpoint_ = options_.endpoint.empty() ? DefaultEndpoint("service", name_) : options_.endpoint;
+      socket_(ZmqContext(), options_.worker_of.empty() ? zmq::socket_type::router
+                                                       : zmq::socket_type::dealer) {
   socket_.set(zmq::sockopt::linger, 0);
   socket_.set(zmq::sockopt::maxmsgsize, options_.max_message_bytes);
+  if (!options_.worker_of.empty()) {  // pool worker: the broker binds, the worker connects
+    endpoint_ = options_.worker_of;
+    CurveSecurity::Apply(socket_, endpoint_, false, "pool worker of service '" + name_ + "'");
+    try {
+      socket_.connect(endpoint_);
+    } catch (const zmq::error_t& e) {
+      throw std::runtime_error("service '" + name_ + "': cannot connect to the pool broker at " +
+                               endpoint_ + ": " + e.what());
+    }
+    Heartbeat();
+    return;
+  }
+  endpoint_ = options_.endpoint.empty() ? DefaultEndpoint("service", name_) : options_.endpoint;
   // A reply to a client that has gone away (Lazy Pirate reopened it) is dropped silently.
   socket_.set(zmq::sockopt::router_mandatory, false);
   Registry::CheckEndpointFree(endpoint_, "service '" + name_ + "'");
+  CurveSecurity::Apply(socket_, endpoint_, true, "service '" + name_ + "'");
   try {
     socket_.bind(endpoint_);
     endpoint_ = socket_.get(zmq::sockopt::last_endpoint);
@@ -53,12 +69,20 @@ RawServiceServer::RawServiceServer(std::string resolved_name, std::string type_n
                              e.what() + " (another server on this endpoint? set the service's "
                              "endpoint parameter)");
   }
-  registry_path_ = Registry::Register({"service", name_, type_name, endpoint_, node_name, 0});
+  RegistryEntry entry{"service", name_, type_name, endpoint_, node_name, 0, "", ""};
+  if (options_.endpoint.empty())  // multi-host launch: also on this host's address
+    entry.remote_endpoint = BindHostEndpoint(socket_, "service '" + name_ + "'");
+  registry_path_ = Registry::Register(entry);
 }
 
 RawServiceServer::~RawServiceServer() {
   Registry::Unregister(registry_path_);
   socket_.close();
+}
+
+void RawServiceServer::Heartbeat() {
+  if (options_.worker_of.empty()) return;
+  socket_.send(zmq::buffer(std::string("READY")), zmq::send_flags::dontwait);
 }
 
 int RawServiceServer::Drain() {
@@ -124,6 +148,11 @@ void RawServiceClient::Open() {
   if (socket_) socket_->close();
   socket_ = std::make_unique<zmq::socket_t>(ZmqContext(), zmq::socket_type::dealer);
   socket_->set(zmq::sockopt::linger, 0);
+  if (options_.resolver) {  // multi-host: the server may have moved (respawn, other host)
+    const std::string found = options_.resolver();
+    if (!found.empty()) endpoint_ = found;
+  }
+  CurveSecurity::Apply(*socket_, endpoint_, false, "client of service '" + name_ + "'");
   socket_->connect(endpoint_);
 }
 

@@ -35,6 +35,10 @@ struct ServiceServerOptions {
   /// ZMQ_MAXMSGSIZE on the bound ROUTER: a peer that sends a larger frame is disconnected
   /// (ZeroMQ enforces it per frame; the largest frame of a request is its biggest blob).
   int64_t max_message_bytes = 64ll << 20;
+  /// Pool worker: instead of binding, connect a DEALER to this broker backend endpoint
+  /// (nodes/pool, docs/POOL.md), announce "READY" and serve what the broker forwards; the
+  /// frames are the same as on the bound ROUTER. "" = an ordinary server.
+  std::string worker_of;
 };
 
 /// Serves one service. Requests are handled one at a time, in arrival order, on the owner
@@ -55,6 +59,9 @@ class RawServiceServer {
 
   /// Handles every queued request (non-blocking). Returns how many.
   int Drain();
+  /// Pool worker: tells the broker this worker is alive and idle (a ["READY"] frame); the node
+  /// calls it every second. No-op for an ordinary server.
+  void Heartbeat();
 
   zmq::socket_t& Socket() { return socket_; }
   const std::string& Name() const { return name_; }
@@ -78,6 +85,9 @@ struct ServiceClientOptions {
   std::string endpoint;  ///< "" = DefaultEndpoint("service", name)
   std::chrono::milliseconds timeout{1000};  ///< per attempt
   int retries = 2;       ///< attempts after the first; total = 1 + retries
+  /// Called before each (re)connect; a non-empty result replaces the endpoint (multi-host
+  /// discovery, peer_registry.h). Empty function = keep `endpoint`.
+  std::function<std::string()> resolver;
 };
 
 /// Calls one service with Lazy Pirate reliability: send, wait up to `timeout`; on timeout close

@@ -5,6 +5,7 @@
 #include <cstring>
 #include <stdexcept>
 
+#include "nodes/runtime/curve_auth.h"
 #include "nodes/runtime/endpoints.h"
 #include "nodes/runtime/shutdown.h"
 #include "nodes/runtime/wire_io.h"
@@ -27,6 +28,7 @@ RawSubscriber::RawSubscriber(std::string resolved_topic, SubscriberOptions optio
   }
   socket_.set(zmq::sockopt::subscribe, topic_frame_);
   for (auto& ep : endpoints_) {
+    CurveSecurity::Apply(socket_, ep, options_.bind, "subscriber of topic '" + topic_ + "'");
     try {
       if (options_.bind) {
         socket_.bind(ep);
@@ -42,6 +44,19 @@ RawSubscriber::RawSubscriber(std::string resolved_topic, SubscriberOptions optio
 }
 
 RawSubscriber::~RawSubscriber() { socket_.close(); }
+
+void RawSubscriber::Connect(const std::string& endpoint) {
+  for (const auto& ep : endpoints_)
+    if (ep == endpoint) return;
+  CurveSecurity::Apply(socket_, endpoint, false, "subscriber of topic '" + topic_ + "'");
+  try {
+    socket_.connect(endpoint);
+  } catch (const zmq::error_t& e) {
+    throw std::runtime_error("subscriber of topic '" + topic_ + "': cannot connect " + endpoint +
+                             ": " + e.what());
+  }
+  endpoints_.push_back(endpoint);
+}
 
 bool RawSubscriber::ReadOne(msgs::WireMessage* m, msgs::pb::Header* header, bool* ok) {
   frames_.clear();

@@ -58,6 +58,9 @@ class RawSubscriber {
   /// Non-blocking: handles everything queued now, calling `handler` for each message (or, if
   /// latest_only, only for the newest). Returns the number of calls.
   int Drain(const Handler& handler);
+  /// Connects one more endpoint (a publisher found later, e.g. on another host); ignores one
+  /// already connected. Owner thread only. Throws std::runtime_error naming topic and endpoint.
+  void Connect(const std::string& endpoint);
   /// Blocks up to `timeout` for one message (then behaves like Drain for latest_only).
   /// Returns false on timeout or shutdown.
   bool Receive(msgs::WireMessage* out, msgs::pb::Header* header,

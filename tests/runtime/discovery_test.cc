@@ -50,7 +50,7 @@ TEST_CASE("Registry: publishers appear with type and endpoint, vanish on close o
   // An entry left behind by a process that died without cleaning up is ignored.
   const pid_t child = fork();
   if (child == 0) {
-    Registry::Register({"topic", "/ghost", "PoseStamped", "ipc:///nowhere", "/ghost", 0});
+    Registry::Register({"topic", "/ghost", "PoseStamped", "ipc:///nowhere", "/ghost", 0, "", ""});
     _exit(0);
   }
   waitpid(child, nullptr, 0);

@@ -1,0 +1,197 @@
+/// @file pool_bench.cc
+/// @brief Views/s through p2i_pool with 1 and 2 p2i_synthesizer workers (docs/POOL.md): C
+/// client threads each call /render (one pose per request) back to back for D seconds.
+///
+/// usage: pool_bench [OUT.json] [--workers 1,2] [--clients 4] [--seconds 10] [--size 64]
+///                   [--method nearest] [--checkpoint FILE]
+/// Each configuration runs in its own P2I_RUN_DIR; processes are the real executables in the
+/// folder of this program.
+#include <fcntl.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <mutex>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "convert/pose.h"
+#include "nodes/runtime/service_client.h"
+#include "scene/trajectory.h"
+
+extern char** environ;
+
+namespace {
+
+using namespace p2i;
+using Clock = std::chrono::steady_clock;
+namespace fs = std::filesystem;
+
+pid_t Spawn(std::vector<std::string> argv, const std::string& run_dir, const std::string& log) {
+  std::vector<std::string> env_store;
+  for (char** e = environ; *e != nullptr; ++e)
+    if (std::strncmp(*e, "P2I_RUN_DIR=", 12) != 0) env_store.emplace_back(*e);
+  env_store.push_back("P2I_RUN_DIR=" + run_dir);
+  std::vector<char*> env, args;
+  for (auto& e : env_store) env.push_back(e.data());
+  env.push_back(nullptr);
+  for (auto& a : argv) args.push_back(a.data());
+  args.push_back(nullptr);
+  posix_spawn_file_actions_t fa;
+  posix_spawn_file_actions_init(&fa);
+  posix_spawn_file_actions_addopen(&fa, 1, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_adddup2(&fa, 1, 2);
+  pid_t pid = -1;
+  if (posix_spawn(&pid, args[0], &fa, nullptr, args.data(), env.data()) != 0) pid = -1;
+  posix_spawn_file_actions_destroy(&fa);
+  if (pid < 0) throw std::runtime_error("cannot start " + argv[0]);
+  return pid;
+}
+
+void StopAll(std::vector<pid_t>* pids) {
+  for (pid_t p : *pids) ::kill(p, SIGTERM);
+  for (pid_t p : *pids) ::waitpid(p, nullptr, 0);
+  pids->clear();
+}
+
+double LoadAverage() {
+  std::ifstream in("/proc/loadavg");
+  double l = 0;
+  in >> l;
+  return l;
+}
+
+std::vector<int> ParseInts(const std::string& s) {
+  std::vector<int> out;
+  std::stringstream ss(s);
+  std::string part;
+  while (std::getline(ss, part, ',')) out.push_back(std::stoi(part));
+  return out;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::string out, method = "nearest", checkpoint;
+  std::vector<int> workers = {1, 2};
+  int clients = 4, size = 64;
+  double seconds = 10;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    auto next = [&]() -> std::string {
+      if (i + 1 >= argc) throw std::invalid_argument(a + " needs a value");
+      return argv[++i];
+    };
+    if (a == "--workers") workers = ParseInts(next());
+    else if (a == "--clients") clients = std::stoi(next());
+    else if (a == "--seconds") seconds = std::stod(next());
+    else if (a == "--size") size = std::stoi(next());
+    else if (a == "--method") method = next();
+    else if (a == "--checkpoint") checkpoint = next();
+    else if (a[0] != '-') out = a;
+    else {
+      std::fprintf(stderr, "usage: pool_bench [OUT.json] [--workers 1,2] [--clients 4] "
+                           "[--seconds 10] [--size 64] [--method nearest] [--checkpoint F]\n");
+      return 2;
+    }
+  }
+  const std::string bin = fs::canonical("/proc/self/exe").parent_path().string();
+  const auto sweep = scene::GenerateArmSweep({});
+  nlohmann::json rows = nlohmann::json::array();
+  std::printf("| workers | clients | size | method | views | failed | views/s | p50 ms | p99 ms | load |\n"
+              "|---|---|---|---|---|---|---|---|---|---|\n");
+  for (int k : workers) {
+    char tmpl[] = "/tmp/p2i-pool-bench-XXXXXX";
+    const std::string run = ::mkdtemp(tmpl);
+    std::vector<pid_t> pids;
+    pids.push_back(Spawn({bin + "/p2i_pool", "status_period:=0"}, run, run + "/pool.log"));
+    for (int w = 0; w < k; ++w) {
+      std::vector<std::string> a = {bin + "/p2i_synthesizer", "--namespace",
+                                    "/w" + std::to_string(w), "-r", "render:=/render",
+                                    "method:=" + method, "dataset:=builtin:small_office",
+                                    "width:=" + std::to_string(size),
+                                    "height:=" + std::to_string(size), "threads:=1",
+                                    "pool:={render: ''}"};
+      if (!checkpoint.empty()) a.push_back("checkpoint:=" + checkpoint);
+      pids.push_back(Spawn(a, run, run + "/synth" + std::to_string(w) + ".log"));
+    }
+    ::setenv("P2I_RUN_DIR", run.c_str(), 1);
+    runtime::ServiceClientOptions o;
+    o.timeout = std::chrono::milliseconds(2000);
+    o.retries = 30;
+    {  // warm-up: every worker answered at least once
+      runtime::ServiceClient<msgs::pb::RenderRequest, msgs::RenderReplyMsg> c("/render", "/bench", o);
+      for (int i = 0; i < 4 * k; ++i) {
+        msgs::pb::RenderRequest r;
+        convert::ToMsg(sweep[i % sweep.size()].pose, r.add_poses());
+        msgs::RenderReplyMsg rep;
+        std::string error;
+        if (!c.Call(r, &rep, &error)) {
+          std::fprintf(stderr, "warm-up failed: %s (logs in %s)\n", error.c_str(), run.c_str());
+          StopAll(&pids);
+          return 1;
+        }
+      }
+    }
+    std::mutex mutex;
+    std::vector<double> latencies;
+    std::atomic<int> failed{0};
+    const auto start = Clock::now();
+    const auto end = start + std::chrono::duration<double>(seconds);
+    std::vector<std::thread> threads;
+    for (int c = 0; c < clients; ++c) {
+      threads.emplace_back([&, c] {
+        runtime::ServiceClient<msgs::pb::RenderRequest, msgs::RenderReplyMsg> client(
+            "/render", "/bench" + std::to_string(c), o);
+        std::vector<double> mine;
+        for (size_t i = c; Clock::now() < end; i += clients) {
+          msgs::pb::RenderRequest r;
+          convert::ToMsg(sweep[i % sweep.size()].pose, r.add_poses());
+          msgs::RenderReplyMsg rep;
+          std::string error;
+          const auto t0 = Clock::now();
+          if (client.Call(r, &rep, &error) && rep.meta.ok()) {
+            mine.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+          } else {
+            ++failed;
+          }
+        }
+        std::lock_guard<std::mutex> lock(mutex);
+        latencies.insert(latencies.end(), mine.begin(), mine.end());
+      });
+    }
+    for (auto& t : threads) t.join();
+    const double elapsed = std::chrono::duration<double>(Clock::now() - start).count();
+    std::sort(latencies.begin(), latencies.end());
+    auto pct = [&](double p) {
+      return latencies.empty() ? 0.0
+                               : latencies[std::min(latencies.size() - 1,
+                                                    static_cast<size_t>(p * latencies.size()))];
+    };
+    const double vps = latencies.size() / elapsed, load = LoadAverage();
+    std::printf("| %d | %d | %d | %s | %zu | %d | %.1f | %.2f | %.2f | %.1f |\n", k, clients, size,
+                method.c_str(), latencies.size(), failed.load(), vps, pct(0.5), pct(0.99), load);
+    std::fflush(stdout);
+    rows.push_back({{"workers", k}, {"clients", clients}, {"size", size}, {"method", method},
+                    {"views", latencies.size()}, {"failed", failed.load()}, {"views_per_s", vps},
+                    {"p50_ms", pct(0.5)}, {"p99_ms", pct(0.99)}, {"load1", load}});
+    StopAll(&pids);
+    fs::remove_all(run);
+  }
+  if (!out.empty()) std::ofstream(out) << rows.dump(2) << "\n";
+  return 0;
+}

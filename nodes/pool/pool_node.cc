@@ -1,0 +1,74 @@
+/// @file pool_node.cc
+/// @brief p2i_pool: parameters, sockets on the executor, registry entry, status counters.
+#include "nodes/pool/pool_node.h"
+
+#include "nodes/runtime/endpoints.h"
+#include "nodes/runtime/peer_registry.h"
+
+namespace p2i::nodes {
+
+PoolNode::PoolNode(const runtime::NodeArgs& args) : Node("pool", args) {
+  const std::string service = Declare<std::string>("service", "render", "service name to serve");
+  const std::string type =
+      Declare<std::string>("type", "RenderRequest", "request type name (for p2i topic list -v)");
+  std::string backend = Declare<std::string>(
+      "backend", "", "endpoint the workers connect to; '' = ipc://$P2I_RUN_DIR/pool.<service>.ipc");
+  const double worker_timeout = Declare<double>(
+      "worker_timeout", 3.0, "s a worker may take for one request before it is presumed dead");
+  const double idle_expiry =
+      Declare<double>("idle_expiry", 3.5, "s an idle worker may go without a heartbeat");
+  const int max_queue = Declare<int>("max_queue", 10000, "requests waiting for a worker, at most");
+  if (worker_timeout <= 0) throw runtime::StartupError("parameter 'worker_timeout' must be > 0");
+  if (idle_expiry <= 0) throw runtime::StartupError("parameter 'idle_expiry' must be > 0");
+  if (max_queue <= 0) throw runtime::StartupError("parameter 'max_queue' must be > 0");
+
+  const std::string resolved = Resolve(service);
+  PoolBrokerOptions o;
+  const auto eps = Declare<std::map<std::string, std::string>>("endpoints", {}, "");
+  auto it = eps.find(resolved);
+  if (it == eps.end()) it = eps.find(service);
+  o.frontend = it != eps.end() ? it->second : runtime::DefaultEndpoint("service", resolved);
+  o.backend = backend.empty() ? runtime::DefaultEndpoint("pool", resolved) : backend;
+  o.worker_timeout = std::chrono::milliseconds(static_cast<int64_t>(worker_timeout * 1000));
+  o.idle_expiry = std::chrono::milliseconds(static_cast<int64_t>(idle_expiry * 1000));
+  o.max_queue = static_cast<size_t>(max_queue);
+  runtime::Registry::CheckEndpointFree(o.frontend, "pool of service '" + resolved + "'");
+  broker_ = std::make_unique<PoolBroker>(o, [this](const std::string& text) {
+    WarnThrottled("pool", text);
+  });
+  runtime::RegistryEntry entry{"service", resolved, type, broker_->FrontendEndpoint(),
+                               FullName(), 0, "", ""};
+  if (it == eps.end())  // multi-host launch: reachable from the other hosts too
+    entry.remote_endpoint = runtime::BindHostEndpoint(broker_->Frontend(), "pool frontend");
+  registry_path_ = runtime::Registry::Register(entry);
+  GetExecutor().AddSocket(&broker_->Frontend(), [this] { broker_->OnFrontend(); });
+  GetExecutor().AddSocket(&broker_->Backend(), [this] { broker_->OnBackend(); });
+  AddTimer(std::chrono::milliseconds(100), [this] {
+    broker_->OnTimer();
+    Publish();
+  });
+  Log().info("pool of {}: clients at {}, workers connect to {}", resolved,
+             broker_->FrontendEndpoint(), broker_->BackendEndpoint());
+}
+
+PoolNode::~PoolNode() {
+  runtime::Registry::Unregister(registry_path_);
+  if (broker_) {
+    GetExecutor().RemoveSocket(&broker_->Frontend());
+    GetExecutor().RemoveSocket(&broker_->Backend());
+  }
+}
+
+void PoolNode::Publish() {
+  const PoolBrokerStats& s = broker_->Stats();
+  Count("pool_requests", s.requests - reported_.requests);
+  Count("pool_replies", s.replies - reported_.replies);
+  Count("pool_requeued", s.requeued - reported_.requeued);
+  Count("pool_workers_lost", s.workers_lost - reported_.workers_lost);
+  Count("pool_refused", s.refused - reported_.refused);
+  SetValue("pool_workers", static_cast<double>(s.workers));
+  SetValue("pool_queued", static_cast<double>(s.queued));
+  reported_ = s;
+}
+
+}  // namespace p2i::nodes

@@ -1,0 +1,110 @@
+/// @file cmd_keygen.cc
+/// @brief `p2i keygen NAME [--dir DIR]` (a CURVE key pair) and `p2i keygen --init DIR` (a key
+/// directory for $P2I_CURVE_DIR); see docs/SECURITY.md.
+#include <sys/stat.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+
+#include "nodes/runtime/curve_auth.h"
+#include "tools/command.h"
+
+namespace p2i::tools {
+namespace {
+
+namespace fs = std::filesystem;
+using runtime::CurveKeyPair;
+
+bool FileHasKey(const std::string& path, const std::string& key) {
+  std::ifstream in(path);
+  std::string line;
+  while (std::getline(in, line))
+    if (line.find(key) != std::string::npos) return true;
+  return false;
+}
+
+int Init(const std::string& dir) {
+  fs::create_directories(dir);
+  fs::permissions(dir, fs::perms::owner_all, fs::perm_options::replace);
+  const std::string self = dir + "/self.key";
+  CurveKeyPair k;
+  if (fs::exists(self)) {
+    k = runtime::ReadKeyFile(self);
+    std::printf("kept the existing key pair %s\n", self.c_str());
+  } else {
+    k = runtime::GenerateCurveKeyPair();
+    runtime::WriteKeyFile(self, k, true);
+    runtime::WriteKeyFile(dir + "/self.pub", k, false);
+    std::printf("wrote %s (secret, 0600) and %s/self.pub\n", self.c_str(), dir.c_str());
+  }
+  const std::string auth = dir + "/authorized_keys";
+  if (!FileHasKey(auth, k.public_z85)) {
+    std::ofstream(auth, std::ios::app) << k.public_z85 << " self\n";
+    std::printf("listed this key in %s (add other hosts' public keys there)\n", auth.c_str());
+  }
+  const std::string servers = dir + "/servers";
+  if (!fs::exists(servers)) {
+    std::ofstream(servers) << "# HOST PUBLIC-KEY of each server this host connects to (* = any)\n"
+                           << "* " << k.public_z85 << "\n";
+    std::printf("wrote %s ('* <this key>': every server is this host until you add lines)\n",
+                servers.c_str());
+  }
+  std::printf("public key: %s\nuse it: export P2I_CURVE_DIR=%s\n", k.public_z85.c_str(),
+              fs::absolute(dir).c_str());
+  return 0;
+}
+
+int RunKeygen(const std::vector<std::string>& args) {
+  CLI::App app{"Make ZeroMQ CURVE keys for p2i's tcp endpoints (docs/SECURITY.md).\n"
+               "  p2i keygen NAME [--dir DIR]   writes DIR/NAME.key (key pair, 0600) and NAME.pub\n"
+               "  p2i keygen --init DIR         a key directory for P2I_CURVE_DIR (self.key,\n"
+               "                                authorized_keys, servers)",
+               "p2i keygen"};
+  std::string name, dir = ".", init;
+  bool force = false;
+  app.add_option("name", name, "Base name of the key files");
+  app.add_option("--dir", dir, "Folder for NAME.key / NAME.pub (default: current folder)");
+  app.add_option("--init", init, "Create or complete a key directory for P2I_CURVE_DIR");
+  app.add_flag("--force", force, "Overwrite an existing NAME.key");
+  std::vector<std::string> rest(args.rbegin(), args.rend() - 1);
+  try {
+    app.parse(rest);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  }
+  try {
+    if (!init.empty()) return Init(init);
+    if (name.empty()) {
+      std::fprintf(stderr, "p2i keygen: give a NAME or --init DIR (see --help)\n");
+      return 2;
+    }
+    const std::string key = dir + "/" + name + ".key";
+    if (fs::exists(key) && !force) {
+      std::fprintf(stderr, "p2i keygen: %s exists; pass --force to replace it (clients that "
+                           "know its public key must then be given the new one)\n", key.c_str());
+      return 1;
+    }
+    fs::create_directories(dir);
+    const CurveKeyPair k = runtime::GenerateCurveKeyPair();
+    runtime::WriteKeyFile(key, k, true);
+    runtime::WriteKeyFile(dir + "/" + name + ".pub", k, false);
+    std::printf("wrote %s (secret, 0600) and %s/%s.pub\npublic key: %s\n", key.c_str(),
+                dir.c_str(), name.c_str(), k.public_z85.c_str());
+    return 0;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "p2i keygen: error: %s\n", e.what());
+    return 1;
+  }
+}
+
+}  // namespace
+
+P2I_COMMAND("keygen", "Make CURVE keys: keygen NAME | keygen --init DIR (docs/SECURITY.md)",
+            RunKeygen);
+
+}  // namespace p2i::tools
