@@ -17,6 +17,7 @@
 #include <torch/torch.h>
 
 #include "model/checkpoint.h"
+#include "model/data_parallel.h"
 #include "model/losses.h"
 #include "model/metrics.h"
 #include "model/networks.h"
@@ -162,6 +163,7 @@ class Run {
   Clock::time_point phase_start_;
   int phase_start_step_ = 0;
   Clock::time_point last_progress_;
+  std::shared_ptr<DataParallel> dp_;  // data-parallel ranks (null = one process)
 };
 
 void Run::ApplyLearningRates() {
@@ -176,6 +178,7 @@ void Run::ApplyLearningRates() {
 }
 
 void Run::Save() {
+  if (dp_ && !dp_->IsWriter()) return;  // rank 0 writes the checkpoints
   SaveCheckpoint(checkpoint_path_, meta_, *nets_, {opt_g_.get(), opt_d_.get(), opt_e_.get()});
 }
 
@@ -220,7 +223,9 @@ void Run::UpdateEma() {
 
 bool Run::StopNow() {
   if (stopped_) return true;
-  if (!options_.should_stop || !options_.should_stop()) return false;
+  bool stop = options_.should_stop && options_.should_stop();
+  if (dp_) stop = dp_->Any(stop);  // every rank stops at the same step
+  if (!stop) return false;
   Save();
   stopped_ = true;
   Log({{"event", "stopped"}, {"phase1_step", meta_.phase1_step}, {"phase2_step", meta_.phase2_step}});
@@ -273,8 +278,12 @@ torch::Tensor Run::BatchIndices(int phase, int step, int64_t n) const {
   std::mt19937_64 rng(config_.seed * 1000003ULL + static_cast<uint64_t>(phase) * 7919ULL +
                       static_cast<uint64_t>(step));
   std::uniform_int_distribution<int64_t> pick(0, n - 1);
-  std::vector<int64_t> idx(static_cast<size_t>(config_.batch_size));
+  // Data-parallel: one global batch of batch_size x ranks; each rank trains on its slice.
+  const int world = dp_ ? dp_->WorldSize() : 1, rank = dp_ ? dp_->Rank() : 0;
+  std::vector<int64_t> idx(static_cast<size_t>(config_.batch_size) * world);
   for (auto& i : idx) i = pick(rng);
+  idx.erase(idx.begin(), idx.begin() + rank * config_.batch_size);
+  idx.resize(static_cast<size_t>(config_.batch_size));
   return torch::tensor(idx, torch::kLong);
 }
 
@@ -310,6 +319,7 @@ int Run::PhaseOne(int target) {
         CheckLoss(loss, "L2 loss", step);
         opt_g_->zero_grad();
         loss.backward();
+        if (dp_) dp_->AverageGradients(*opt_g_);
         opt_g_->step();
         const double v = loss.item<double>();
         ema_ = ema_ < 0 ? std::abs(v) : 0.95 * ema_ + 0.05 * std::abs(v);
@@ -335,6 +345,7 @@ int Run::PhaseOne(int target) {
           CheckLoss(dl_k.total, "L_D", step);
           opt_d_->zero_grad();
           dl_k.total.backward();
+          if (dp_) dp_->AverageGradients(*opt_d_);
           opt_d_->step();
         }
         // D step on a detached fake.
@@ -348,12 +359,14 @@ int Run::PhaseOne(int target) {
         CheckLoss(dl.total, "L_D", step);
         opt_d_->zero_grad();
         dl.total.backward();
+        if (dp_) dp_->AverageGradients(*opt_d_);
         opt_d_->step();
         // G step through the updated D (D's grads are discarded: only opt_g steps).
         auto gl = GeneratorLoss(d->forward(fake), d->MapPose(y), y, w);
         CheckLoss(gl.total, "L_G", step);
         opt_g_->zero_grad();
         gl.total.backward();
+        if (dp_) dp_->AverageGradients(*opt_g_);
         opt_g_->step();
         if (nets_->g_ema) UpdateEma();
         const double ld = dl.total.item<double>(), lg = gl.total.item<double>();
@@ -414,6 +427,7 @@ int Run::PhaseTwo(int target) {
       CheckLoss(el.total, "L_ENET", step);
       opt_e_->zero_grad();
       el.total.backward();
+      if (dp_) dp_->AverageGradients(*opt_e_);
       opt_e_->step();
       const double v = el.total.item<double>();
       ema_ = ema_ < 0 ? std::abs(v) : 0.95 * ema_ + 0.05 * std::abs(v);
@@ -451,6 +465,7 @@ void TrainerOptions::Validate() const {
   if (threads < 1) throw std::invalid_argument("TrainerOptions: threads must be >= 1");
   if (max_val_frames < 1) throw std::invalid_argument("TrainerOptions: max_val_frames must be >= 1");
   if (max_rollbacks < 0) throw std::invalid_argument("TrainerOptions: max_rollbacks must be >= 0");
+  distributed.Validate();
 }
 
 Trainer::Trainer(P2iConfig config, TrainerOptions options)
@@ -548,10 +563,14 @@ TrainReport Run::Go(const scene::RgbdDataset& train, const scene::RgbdDataset& v
     meta_.camera = SquareCamera(train.camera, config_.resolution);
   }
   ApplyLearningRates();
+  dp_ = DataParallel::For(options_.distributed);
+  if (dp_) dp_->Start(&meta_.phase1_step, &meta_.phase2_step, *nets_);  // same start everywhere
   train_ = Prepare(train.frames, config_, meta_.normalizer, train.frames.size());
   val_ = Prepare(val.frames, config_, meta_.normalizer, static_cast<size_t>(options_.max_val_frames));
 
-  log_.open(options_.out_dir + "/train_log.jsonl", std::ios::app);
+  log_.open(options_.out_dir + (dp_ && dp_->Rank() > 0 ? "/train_log.rank" +
+                                   std::to_string(dp_->Rank()) + ".jsonl" : "/train_log.jsonl"),
+            std::ios::app);
   if (!log_) throw std::runtime_error("cannot open " + options_.out_dir + "/train_log.jsonl");
 
   TrainReport report;
@@ -588,6 +607,7 @@ TrainReport Run::Go(const scene::RgbdDataset& train, const scene::RgbdDataset& v
        {"phase2_step", meta_.phase2_step},
        {"rollbacks", meta_.rollbacks},
        {"val_psnr", last_val_psnr_}});
+  if (dp_) dp_->WriteStats(options_.out_dir);
   report.phase1_steps = meta_.phase1_step;
   report.phase2_steps = meta_.phase2_step;
   report.rollbacks = meta_.rollbacks;

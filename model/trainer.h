@@ -9,6 +9,7 @@
 #include <memory>
 #include <string>
 
+#include "model/distributed.h"
 #include "model/p2i_config.h"
 #include "scene/rgbd_sample.h"
 
@@ -33,6 +34,8 @@ struct TrainerOptions {
   /// Fault injection for tests: poison the phase-1 loss with NaN once at this step (-1 = never).
   int inject_nan_at_step = -1;
   std::function<bool()> should_stop;  ///< polled between steps; true = save a checkpoint now and return
+  /// Data-parallel ranks (model/distributed.h, docs/DISTRIBUTED.md); world_size 1 = off.
+  DistributedOptions distributed;
 
   void Validate() const;
 };

@@ -6,6 +6,8 @@ set -euo pipefail
 PACKAGES=(
   build-essential cmake pkg-config git
   libtorch-dev
+  # gloo headers: torch's c10d ProcessGroupGloo (data-parallel training, model/distributed.*)
+  libgloo-dev
   libopencv-dev libopencv-contrib-dev
   libeigen3-dev
   libzmq3-dev cppzmq-dev

@@ -48,6 +48,9 @@ scene::RgbdDataset RenderBuiltin(const std::string& name, int frames, int side, 
   return data;
 }
 
+// --world-size / --rank / --master ... (data-parallel ranks, docs/DISTRIBUTED.md).
+model::DistributedOptions g_distributed;
+
 int Train(const model::P2iConfig& config, const scene::RgbdDataset& train,
           const scene::RgbdDataset& val, const std::string& out_dir, int phase, int steps,
           int threads, bool resume, bool quiet, const std::string& init_from) {
@@ -60,6 +63,7 @@ int Train(const model::P2iConfig& config, const scene::RgbdDataset& train,
   options.init_from = init_from;
   options.progress = !quiet;
   options.should_stop = [] { return g_stop != 0; };
+  options.distributed = g_distributed;
   model::Trainer trainer(config, options);
   // Ctrl-C / SIGTERM stop between steps with a checkpoint (`--resume` continues exactly).
   std::signal(SIGINT, OnStopSignal);
@@ -105,6 +109,17 @@ int RunTrain(const std::vector<std::string>& args) {
   app.add_option("--init-from", init_from,
                  "warm start (without --resume): G/ENET weights, pose normalisation and step "
                  "counters from this checkpoint (full or `p2i export`ed); D and optimisers fresh");
+  app.add_option("--world-size", g_distributed.world_size,
+                 "data-parallel: number of ranks (processes, on any hosts; docs/DISTRIBUTED.md)")
+      ->check(CLI::PositiveNumber);
+  app.add_option("--rank", g_distributed.rank, "data-parallel: this process's rank, 0..N-1");
+  app.add_option("--master", g_distributed.master,
+                 "data-parallel: HOST:PORT where rank 0 meets the others (e.g. 10.0.0.1:29500)");
+  app.add_option("--dist-address", g_distributed.address,
+                 "data-parallel: this rank's address for Gloo (default: 127.0.0.1 for a "
+                 "loopback master, else the host name's)");
+  app.add_option("--dist-timeout", g_distributed.timeout_s,
+                 "data-parallel: seconds to wait for the other ranks (rendezvous, each step)");
   std::vector<std::string> rev(args.rbegin(), args.rend() - 1);
   try {
     app.parse(rev);

@@ -1,0 +1,165 @@
+/// @file distributed_test.cc
+/// @brief Data-parallel `p2i train` on Gloo over loopback: two ranks give the weights of one
+/// rank with the doubled batch; a rank killed mid-run stops the other with a clear error and
+/// an intact checkpoint, from which every rank resumes.
+#include <signal.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <thread>
+
+#include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
+#include <torch/torch.h>
+
+#include "model/checkpoint.h"
+#include "model/distributed.h"
+#include "tests/model/model_test_util.h"
+#include "tests/process_util.h"
+#include "tests/test_paths.h"
+
+using namespace p2i::model;
+using namespace p2i::model::testing;
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string Slurp(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+std::string Port() { return std::to_string(30000 + (::getpid() * 7) % 20000); }
+
+/// `p2i train` through the shell (output in `log`); `exec` keeps the pid the trainer's.
+std::unique_ptr<p2i::testing::Process> Train(const std::string& args, const std::string& log) {
+  const std::string cmd = "exec '" + p2i::testing::BinDir() + "/p2i' train " + args + " > '" +
+                          log + "' 2>&1";
+  return std::make_unique<p2i::testing::Process>(std::vector<std::string>{"/bin/sh", "-c", cmd});
+}
+
+/// Mean absolute difference of G's parameters in two checkpoints (the largest over tensors).
+double GDifference(const P2iConfig& config, const std::string& a, const std::string& b) {
+  Networks na(config), nb(config);
+  LoadCheckpoint(a, na, {}, false);
+  LoadCheckpoint(b, nb, {}, false);
+  auto pa = na.g->parameters(), pb = nb.g->parameters();
+  REQUIRE(pa.size() == pb.size());
+  double worst = 0;
+  for (size_t i = 0; i < pa.size(); ++i)
+    worst = std::max(worst, (pa[i] - pb[i]).abs().mean().item<double>());
+  return worst;
+}
+
+}  // namespace
+
+TEST_CASE("DistributedOptions: bad ranks, masters and timeouts are named", "[unit]") {
+  DistributedOptions o;
+  o.Validate();  // one process
+  o.world_size = 2;
+  o.rank = 2;
+  o.master = "127.0.0.1:29500";
+  CHECK_THROWS_WITH(o.Validate(), Catch::Contains("--rank 2 must be in 0..1"));
+  o.rank = 1;
+  o.master = "127.0.0.1";
+  CHECK_THROWS_WITH(o.Validate(), Catch::Contains("must be HOST:PORT"));
+  o.master = "127.0.0.1:29500";
+  o.timeout_s = 0;
+  CHECK_THROWS_WITH(o.Validate(), Catch::Contains("--dist-timeout"));
+}
+
+TEST_CASE("Two Gloo ranks on loopback give the weights of one rank with the doubled batch",
+          "[integration]") {
+  const auto dir = TempDir("dp_equal");
+  P2iConfig c = TinyConfig("cnn_baseline");
+  c.checkpoint_every = 100;
+  std::ofstream(dir + "/b4.yaml") << c.ToYamlString();
+  P2iConfig c8 = c;
+  c8.batch_size = 8;
+  std::ofstream(dir + "/b8.yaml") << c8.ToYamlString();
+  const std::string common = " --data procedural --frames 16 --phase 1 --steps 5 --threads 1 --quiet";
+  int code = -1;
+  const std::string one = p2i::testing::RunCommand(
+      p2i::testing::BinDir() + "/p2i train " + dir + "/b8.yaml" + common + " --out " + dir +
+          "/one 2>&1", &code);
+  INFO(one);
+  REQUIRE(code == 0);
+  p2i::testing::RunCommand(p2i::testing::BinDir() + "/p2i train " + dir + "/b4.yaml" + common +
+                               " --out " + dir + "/single4 2>&1", &code);
+  REQUIRE(code == 0);
+
+  const std::string dist = dir + "/b4.yaml" + common + " --out " + dir +
+                           "/two --world-size 2 --master 127.0.0.1:" + Port() +
+                           " --dist-timeout 60 --rank ";
+  auto r0 = Train(dist + "0", dir + "/rank0.log");
+  auto r1 = Train(dist + "1", dir + "/rank1.log");
+  const int c0 = r0->Wait(), c1 = r1->Wait();
+  INFO(Slurp(dir + "/rank0.log") << Slurp(dir + "/rank1.log"));
+  REQUIRE(c0 == 0);
+  REQUIRE(c1 == 0);
+  CHECK(ReadCheckpointMeta(dir + "/two/checkpoint.pt").phase1_step == 5);
+  CHECK(fs::exists(dir + "/two/train_log.rank1.jsonl"));  // rank 1 logs, never checkpoints
+
+  const double same = GDifference(c, dir + "/one/checkpoint.pt", dir + "/two/checkpoint.pt");
+  const double other = GDifference(c, dir + "/single4/checkpoint.pt", dir + "/two/checkpoint.pt");
+  INFO("two ranks vs doubled batch " << same << ", vs one rank with the single batch " << other);
+  CHECK(same < 1e-6);
+  CHECK(other > 100 * std::max(same, 1e-9));  // the comparison can tell batches apart
+
+  // Every all-reduce carried all of G's gradients as float32.
+  Networks n(c);
+  int64_t numel = 0;
+  for (const auto& p : n.g->parameters()) numel += p.numel();
+  const auto stats = nlohmann::json::parse(Slurp(dir + "/two/distributed.rank0.json"));
+  CHECK(stats["bytes_per_allreduce"].get<int64_t>() == 4 * numel);
+  CHECK(stats["allreduce_calls"].get<int>() == 5);
+  fs::remove_all(dir);
+}
+
+TEST_CASE("A rank killed mid-run stops the other with a clear error; both resume from rank 0's "
+          "intact checkpoint",
+          "[integration]") {
+  const auto dir = TempDir("dp_kill");
+  P2iConfig c = TinyConfig("cnn_baseline");
+  c.checkpoint_every = 5;
+  std::ofstream(dir + "/tiny.yaml") << c.ToYamlString();
+  const std::string port = std::to_string(std::stoi(Port()) + 1);
+  const std::string common = dir + "/tiny.yaml --data procedural --frames 16 --phase 1 "
+                             "--threads 1 --quiet --out " + dir + "/run --world-size 2 "
+                             "--master 127.0.0.1:" + port + " --dist-timeout 20";
+  auto r0 = Train(common + " --steps 1000000 --rank 0", dir + "/rank0.log");
+  auto r1 = Train(common + " --steps 1000000 --rank 1", dir + "/rank1.log");
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (Slurp(dir + "/run/train_log.jsonl").find("\"step\":20") == std::string::npos &&
+         std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  REQUIRE(Slurp(dir + "/run/train_log.jsonl").find("\"step\":20") != std::string::npos);
+  ::kill(r1->pid(), SIGKILL);
+  CHECK(r1->Wait() == -SIGKILL);
+  const int c0 = r0->Wait();  // no hang: the dead peer's connection fails the all-reduce
+  const std::string log0 = Slurp(dir + "/rank0.log");
+  INFO(log0);
+  CHECK(c0 != 0);
+  CHECK(log0.find("lost contact with the other ranks") != std::string::npos);
+  CHECK(log0.find("--resume") != std::string::npos);
+
+  // The checkpoint is whole (written atomically by rank 0) and every rank resumes from it.
+  const CheckpointMeta meta = ReadCheckpointMeta(dir + "/run/checkpoint.pt");
+  CHECK(meta.phase1_step >= 20);
+  Networks n(c);
+  CHECK_NOTHROW(LoadCheckpoint(dir + "/run/checkpoint.pt", n, {}, false));
+  const std::string to = " --steps " + std::to_string(meta.phase1_step + 3) + " --resume --rank ";
+  auto q0 = Train(common + to + "0", dir + "/resume0.log");
+  auto q1 = Train(common + to + "1", dir + "/resume1.log");
+  const int e0 = q0->Wait(), e1 = q1->Wait();
+  INFO(Slurp(dir + "/resume0.log") << Slurp(dir + "/resume1.log"));
+  CHECK(e0 == 0);
+  CHECK(e1 == 0);
+  CHECK(ReadCheckpointMeta(dir + "/run/checkpoint.pt").phase1_step == meta.phase1_step + 3);
+  fs::remove_all(dir);
+}
