@@ -72,3 +72,5 @@ TEST_CASE("launched pool: /render spread over two synthesizers, one SIGKILLed mi
   CHECK(status.Value("/pool", "pool_workers") == 1);
   graph.Stop();
 }
+
+}  // namespace p2i::pipeline
