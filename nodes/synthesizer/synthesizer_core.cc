@@ -42,10 +42,13 @@ void SynthesizerCoreOptions::Validate() const {
   }
   if (max_poses < 1 || max_poses > msgs::kMaxBatch) {
     throw std::invalid_argument("synthesizer: max_poses must be in [1, " +
-                                std::to_string(msgs::kMaxBatch) + "], got " +
-                                std::to_string(max_poses));
+                                std::to_string(msgs::kMaxBatch) + "] (got " +
+                                std::to_string(max_poses) + ")");
   }
-  if (max_batch < 1) throw std::invalid_argument("synthesizer: max_batch must be >= 1");
+  if (max_batch < 1) {
+    throw std::invalid_argument("synthesizer: max_batch must be >= 1 (got " +
+                                std::to_string(max_batch) + ")");
+  }
 }
 
 SynthesizerCore::SynthesizerCore(SynthesizerCoreOptions options, SynthesizerLoader loader,

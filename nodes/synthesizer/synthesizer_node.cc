@@ -6,38 +6,28 @@
 
 #include "model/coverage.h"
 #include "nodes/synthesizer/method_loader.h"
+#include "nodes/synthesizer/synthesizer_options.h"
 
 namespace p2i::nodes {
 
 SynthesizerNode::SynthesizerNode(const runtime::NodeArgs& args)
     : runtime::Node("synthesizer", args) {
-  SynthesizerCoreOptions core_options;
-  core_options.method =
-      Declare<std::string>("method", "p2i", "p2i | cnn (checkpoint) | nearest | warp (dataset)");
-  const std::string checkpoint = Declare<std::string>(
-      "checkpoint", "", "learned methods: start-up checkpoint; '' = wait for model_version");
-  const std::string dataset = Declare<std::string>(
-      "dataset", "builtin:small_office",
-      "training data: frames for nearest/warp, poses for the coverage score; a dataset folder, "
-      "builtin:NAME (default arm sweep rendered at width x height) or '' (coverage 0)");
-  const int width = Declare<int>("width", 64, "resolution of built-in/resized training data");
-  const int height = Declare<int>("height", 64, "resolution of built-in/resized training data");
-  const int stride = Declare<int>("dataset_stride", 1, "keep every N-th training frame");
-  LoaderOptions loader_options;
-  loader_options.threads = Declare<int>("threads", 2, "torch threads (learned methods)");
-  loader_options.warp_k = Declare<int>("warp_k", 4, "warp: source frames per view");
-  loader_options.warp_fill_holes = Declare<bool>("warp_fill_holes", true, "warp: fill holes");
-  core_options.max_poses = Declare<int>("max_poses", 256, "most poses in one RenderRequest");
-  core_options.max_batch = Declare<int>("max_batch", 16, "poses per network batch");
-  const bool topic_mode =
-      Declare<bool>("topic_mode", true, "render planned_poses onto views (latest-only)");
-
-  learned_ = core_options.method == "p2i" || core_options.method == "cnn";
+  SynthesizerOptions options = SynthesizerOptions::FromParameters(Params());
+  try {
+    options.Validate();
+  } catch (const std::invalid_argument& e) {
+    throw runtime::StartupError(e.what());
+  }
+  const SynthesizerCoreOptions& core_options = options.core;
+  const std::string& checkpoint = options.checkpoint;
+  const std::string& dataset = options.dataset;
+  learned_ = options.Learned();
   std::shared_ptr<const model::CoverageScorer> coverage;
   SynthesizerLoader loader;
   try {
     auto training = std::make_shared<const scene::RgbdDataset>(
-        LoadTrainingData(dataset, width, height, /*with_frames=*/!learned_, stride));
+        LoadTrainingData(dataset, options.width, options.height, /*with_frames=*/!learned_,
+                         options.dataset_stride));
     if (!training->frames.empty()) {
       std::vector<scene::Pose> poses;
       poses.reserve(training->frames.size());
@@ -45,7 +35,7 @@ SynthesizerNode::SynthesizerNode(const runtime::NodeArgs& args)
       coverage = std::make_shared<const model::CoverageScorer>(std::move(poses));
     }
     Log().info("training data '{}': {} frames", dataset, training->frames.size());
-    loader = MakeLoader(core_options.method, loader_options, training);
+    loader = MakeLoader(core_options.method, options.loader, training);
     core_ = std::make_unique<SynthesizerCore>(core_options, loader, coverage);
     core_->SetCountHook([this](const std::string& key, uint64_t n) { Count(key, n); });
     if (!learned_) {
@@ -72,7 +62,7 @@ SynthesizerNode::SynthesizerNode(const runtime::NodeArgs& args)
         return true;  // refusals are replies (ok = false), not transport errors
       });
 
-  if (topic_mode) {
+  if (options.topic_mode) {
     views_pub_ = Advertise<msgs::View>("views");
     topic_ = std::make_unique<TopicRenderer>(core_.get(), [this](msgs::View&& view) {
       views_pub_->Publish(view);

@@ -1,0 +1,57 @@
+/// @file synthesizer_options.cc
+/// @brief The synthesizer node's parameters -> SynthesizerOptions, and their validation.
+#include "nodes/synthesizer/synthesizer_options.h"
+
+#include <stdexcept>
+
+namespace p2i::nodes {
+
+SynthesizerOptions SynthesizerOptions::FromParameters(runtime::Parameters& params) {
+  SynthesizerOptions o;  // the defaults, written once in the field initialisers
+  o.core.method = params.Declare<std::string>(
+      "method", o.core.method, "p2i | cnn (checkpoint) | nearest | warp (dataset)");
+  o.checkpoint = params.Declare<std::string>(
+      "checkpoint", o.checkpoint, "learned methods: start-up checkpoint; '' = wait for model_version");
+  o.dataset = params.Declare<std::string>(
+      "dataset", o.dataset,
+      "training data: frames for nearest/warp, poses for the coverage score; a dataset folder, "
+      "builtin:NAME (default arm sweep rendered at width x height) or '' (coverage 0)");
+  o.width = params.Declare<int>("width", o.width, "resolution of built-in/resized training data");
+  o.height =
+      params.Declare<int>("height", o.height, "resolution of built-in/resized training data");
+  o.dataset_stride =
+      params.Declare<int>("dataset_stride", o.dataset_stride, "keep every N-th training frame");
+  o.loader.threads =
+      params.Declare<int>("threads", o.loader.threads, "torch threads (learned methods)");
+  o.loader.warp_k = params.Declare<int>("warp_k", o.loader.warp_k, "warp: source frames per view");
+  o.loader.warp_fill_holes =
+      params.Declare<bool>("warp_fill_holes", o.loader.warp_fill_holes, "warp: fill holes");
+  o.core.max_poses =
+      params.Declare<int>("max_poses", o.core.max_poses, "most poses in one RenderRequest");
+  o.core.max_batch =
+      params.Declare<int>("max_batch", o.core.max_batch, "poses per network batch");
+  o.topic_mode = params.Declare<bool>("topic_mode", o.topic_mode,
+                                      "render planned_poses onto views (latest-only)");
+  return o;
+}
+
+void SynthesizerOptions::Validate() const {
+  core.Validate();
+  const auto at_least = [](const char* name, int value, int min) {
+    if (value < min) {
+      throw std::invalid_argument("synthesizer: " + std::string(name) + " must be >= " +
+                                  std::to_string(min) + " (got " + std::to_string(value) + ")");
+    }
+  };
+  at_least("width", width, 0);
+  at_least("height", height, 0);
+  at_least("dataset_stride", dataset_stride, 1);
+  at_least("threads", loader.threads, 1);
+  at_least("warp_k", loader.warp_k, 1);
+  if ((width == 0) != (height == 0)) {
+    throw std::invalid_argument("synthesizer: width and height must both be > 0 or both 0 (got " +
+                                std::to_string(width) + "x" + std::to_string(height) + ")");
+  }
+}
+
+}  // namespace p2i::nodes
