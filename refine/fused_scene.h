@@ -1,0 +1,43 @@
+/// @file fused_scene.h
+/// @brief The slice of the fusion geometry + appearance the refinement's training needs: fuse
+/// frames into a TSDF, keep keyframes, render a view's candidates (fusion/view_candidates.h),
+/// save the TSDF. MakeFusedScene builds it over the fusion code (fused_scene.cc).
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include "fusion/view_candidates.h"
+#include "scene/camera_info.h"
+#include "scene/rgbd_sample.h"
+
+namespace p2i::refine {
+
+struct FusedSceneOptions {
+  double voxel_size_m = 0.03;
+  double sdf_trunc_m = 0.0;   ///< 0 = 4 voxels
+  double depth_max_m = 5.0;
+  int k = 4;                  ///< keyframe slots per view
+  void Validate() const;
+};
+
+/// Not thread-safe: one caller at a time.
+class FusedScene {
+ public:
+  virtual ~FusedScene() = default;
+  /// Fuses a frame into the TSDF (any size; `camera` is the frame's).
+  virtual void Integrate(const scene::RgbdSample& frame, const scene::CameraInfo& camera) = 0;
+  /// Adds a keyframe for appearance (its colours and its own depth for the visibility test).
+  virtual void AddKeyframe(const scene::RgbdSample& frame, const scene::CameraInfo& camera) = 0;
+  virtual size_t Keyframes() const = 0;
+  /// The candidates of the view at `pose` seen by `camera`.
+  virtual fusion::ViewCandidates Render(const scene::Pose& pose, const scene::CameraInfo& camera) = 0;
+  /// Writes the TSDF to `path` in full before returning.
+  virtual void SaveTsdf(const std::string& path) const = 0;
+  virtual const FusedSceneOptions& options() const = 0;
+};
+
+/// Over the fusion code (fusion/). Throws std::invalid_argument on bad options.
+std::unique_ptr<FusedScene> MakeFusedScene(const FusedSceneOptions& options);
+
+}  // namespace p2i::refine

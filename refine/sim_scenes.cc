@@ -1,0 +1,83 @@
+/// @file sim_scenes.cc
+/// @brief Randomised sim scenes for the cross-scene refinement (see refine_sim_scenes.h).
+#include "refine/sim_scenes.h"
+
+#include <algorithm>
+#include <random>
+#include <stdexcept>
+
+namespace p2i::refine {
+
+void SimScenesOptions::Validate() const {
+  if (scenes < 1) throw std::invalid_argument("SimScenesOptions: scenes must be >= 1");
+  if (bases.empty()) throw std::invalid_argument("SimScenesOptions: bases is empty");
+  if (frames < 2) throw std::invalid_argument("SimScenesOptions: frames must be >= 2");
+  if (frame_step < 1) throw std::invalid_argument("SimScenesOptions: frame_step must be >= 1");
+  if (width < 8 || height < 8)
+    throw std::invalid_argument("SimScenesOptions: width and height must be >= 8");
+}
+
+scene::SimScene MakeSimVariant(const std::string& base, int index, uint64_t seed) {
+  scene::SimSceneDescription d = scene::SimScene::BuiltIn(base).description();
+  std::mt19937_64 rng(seed * 1000003ULL + static_cast<uint64_t>(index) * 7919ULL + 17);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const scene::SimTexture kinds[] = {scene::SimTexture::kChecker, scene::SimTexture::kTiles,
+                                     scene::SimTexture::kWood,    scene::SimTexture::kNoise,
+                                     scene::SimTexture::kPoster,  scene::SimTexture::kStripes,
+                                     scene::SimTexture::kSolid};
+  for (auto& m : d.materials) {
+    if (u(rng) < 0.6) m.texture = kinds[static_cast<int>(u(rng) * 7) % 7];
+    for (int c = 0; c < 3; ++c) {
+      m.color[c] = std::clamp(m.color[c] * (0.6 + 0.8 * u(rng)) + 0.2 * (u(rng) - 0.5), 0.02, 0.98);
+      m.color2[c] = std::clamp(m.color2[c] * (0.6 + 0.8 * u(rng)) + 0.2 * (u(rng) - 0.5), 0.02, 0.98);
+    }
+    m.scale = std::max(0.02, m.scale * (0.5 + u(rng)));
+    m.seed = static_cast<uint32_t>(rng());
+  }
+  d.ambient = 0.15 + 0.3 * u(rng);
+  for (auto& l : d.lights) {
+    l.intensity *= 0.5 + u(rng);
+    const double tint = 0.15 * (u(rng) - 0.5);
+    l.color = Eigen::Vector3d(1.0 + tint, 1.0, 1.0 - tint);
+    if (l.type == scene::SimLight::Type::kPoint) {
+      l.position.x() += 0.8 * (u(rng) - 0.5);
+      l.position.y() += 0.8 * (u(rng) - 0.5);
+    }
+  }
+  d.name = base + "_v" + std::to_string(index);
+  d.Validate();
+  scene::SimSensorOptions s;
+  if (index % 3 != 0) {  // every third variant keeps the exact render
+    s = scene::SimSensorOptions::Kinect(static_cast<uint32_t>(rng()));
+    s.rgb_noise_sigma = 3.0 * u(rng);
+    s.depth_dropout = 0.05 * u(rng);
+  }
+  return scene::SimScene(d, s);
+}
+
+std::vector<SimTrainingScene> MakeSimScenes(const SimScenesOptions& options) {
+  options.Validate();
+  std::vector<SimTrainingScene> out;
+  const scene::CameraInfo camera = scene::SimScene::DefaultCamera(options.width, options.height);
+  for (int i = 0; i < options.scenes; ++i) {
+    const std::string& base = options.bases[static_cast<size_t>(i) % options.bases.size()];
+    const scene::SimScene sim = MakeSimVariant(base, i, options.seed);
+    scene::RandomWalkOptions walk;
+    walk.seed = static_cast<uint32_t>(options.seed * 31 + static_cast<uint64_t>(i));
+    walk.duration = (options.frames * options.frame_step + 1) / walk.rate_hz;
+    const std::vector<scene::StampedPose> poses = scene::GenerateRandomWalk(walk, sim);
+    SimTrainingScene s;
+    s.name = sim.description().name;
+    s.frames.camera = camera;
+    for (size_t k = 0; k < poses.size() && s.frames.frames.size() < static_cast<size_t>(options.frames);
+         k += static_cast<size_t>(options.frame_step)) {
+      scene::RgbdSample f = sim.Render(poses[k].pose, camera, poses[k].stamp);
+      f.id = s.name + "/" + std::to_string(k);
+      s.frames.frames.push_back(std::move(f));
+    }
+    out.push_back(std::move(s));
+  }
+  return out;
+}
+
+}  // namespace p2i::refine
