@@ -21,7 +21,7 @@ PACKAGES=(
   # it is the netlib reference BLAS, ~15x slower; the OpenMP build shares LibTorch's libgomp)
   libopenblas0-openmp
   libopen3d-dev libboost-dev
-  libwebsocketpp-dev libzstd-dev liblz4-dev
+  libwebsocketpp-dev libzstd-dev liblz4-dev zlib1g-dev
   python3-zmq python3-protobuf
   iproute2
 )
