@@ -12,6 +12,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "convert/pose.h"
 #include "msgs/codec.h"
 #include "nodes/foxglove_bridge/bridge_node.h"
 #include "nodes/runtime/shutdown.h"
@@ -52,7 +53,7 @@ TEST_CASE("p2i_foxglove_bridge: advertise, subscribe, bad requests, slow client,
   std::thread publisher([&] {
     msgs::RgbdFrame f;
     f.meta.set_camera_info_id("cam");
-    msgs::SetPose({0, 0, 1, 0, 0, 0, 1}, f.meta.mutable_pose());
+    convert::SetPose({0, 0, 1, 0, 0, 0, 1}, f.meta.mutable_pose());
     f.rgb = msgs::Image::Allocate(msgs::pb::RGB8, 320, 240);
     f.depth = msgs::Image::Allocate(msgs::pb::DEPTH32F, 320, 240);
     while (!stop) {

@@ -8,6 +8,7 @@
 #include <google/protobuf/descriptor.pb.h>
 #include <google/protobuf/dynamic_message.h>
 
+#include "convert/pose.h"
 #include "msgs/codec.h"
 #include "msgs/foxglove.pb.h"
 #include "recording/foxglove_convert.h"
@@ -59,7 +60,7 @@ TEST_CASE("Inline blobs: RgbdFrame -> recorded bytes -> the same frame", "[unit]
 
   // A blob-less type passes through unchanged.
   msgs::pb::PoseStamped p;
-  msgs::SetPose({1, 2, 3, 0, 0, 0, 1}, p.mutable_pose());
+  convert::SetPose({1, 2, 3, 0, 0, 0, 1}, p.mutable_pose());
   const auto pw = msgs::Encode(p);
   auto pr = InlinedMessage::Make(msgs::pb::PoseStamped::descriptor(), pw, &error);
   REQUIRE(pr);
@@ -71,7 +72,7 @@ TEST_CASE("Inline blobs: RenderReply with images in repeated views round-trips",
   r.meta.set_ok(true);
   for (int i = 0; i < 2; ++i) {
     auto* v = r.meta.add_views();
-    msgs::SetPose({0.1 * i, 0, 0, 0, 0, 0, 1}, v->mutable_pose());
+    convert::SetPose({0.1 * i, 0, 0, 0, 0, 0, 1}, v->mutable_pose());
     msgs::Image rgb = msgs::Image::Allocate(msgs::pb::RGB8, 4, 3);
     rgb.MutableData()[0] = static_cast<uint8_t>(10 + i);
     r.images.push_back(rgb);

@@ -8,6 +8,7 @@
 #include <fstream>
 #include <string>
 
+#include "convert/pose.h"
 #include "msgs/codec.h"
 
 namespace p2i::recording::testing {
@@ -33,7 +34,7 @@ inline msgs::RgbdFrame SampleFrame(uint32_t w, uint32_t h, int seed) {
   ci->set_width(w);
   ci->set_height(h);
   for (double v : {50.0, 0.0, w / 2.0, 0.0, 50.0, h / 2.0, 0.0, 0.0, 1.0}) ci->add_k(v);
-  msgs::SetPose({0.1 * seed, 0.2, 0.3, 0.0, 0.0, 0.0, 1.0}, f.meta.mutable_pose());
+  convert::SetPose({0.1 * seed, 0.2, 0.3, 0.0, 0.0, 0.0, 1.0}, f.meta.mutable_pose());
   f.rgb = msgs::Image::Allocate(msgs::pb::RGB8, w, h);
   f.depth = msgs::Image::Allocate(msgs::pb::DEPTH32F, w, h);
   for (size_t i = 0; i < f.rgb.data->size(); ++i) f.rgb.MutableData()[i] = (i * 7 + seed) & 0xff;
