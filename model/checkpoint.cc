@@ -2,12 +2,15 @@
 /// @brief Checkpoint file IO (see checkpoint.h).
 #include "model/checkpoint.h"
 
+#include "model/checkpoint_integrity.h"
 #include "model/trainer.h"
 
 #include <unistd.h>
 
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
+#include <map>
 #include <stdexcept>
 
 #include <ATen/CPUGeneratorImpl.h>
@@ -46,13 +49,41 @@ void SaveModule(torch::serialize::OutputArchive& root, const std::string& key,
   root.write(key, sub);
 }
 
-void LoadModule(torch::serialize::InputArchive& root, const std::string& key,
+void SaveModule(torch::serialize::OutputArchive& root, const std::string& key,
+                const std::shared_ptr<torch::nn::Module>& module,
+                std::map<std::string, int64_t>* manifest) {
+  if (!module) return;
+  SaveModule(root, key, module);
+  AddToManifest(key, *module, manifest);
+}
+
+// A checkpoint file read and verified (CRC, size) and opened as a LibTorch archive.
+struct OpenedCheckpoint {
+  CheckpointPayload payload;
+  torch::serialize::InputArchive archive;
+};
+
+void OpenCheckpoint(const std::string& path, OpenedCheckpoint* out) {
+  if (!std::filesystem::exists(path))
+    throw std::runtime_error("checkpoint " + path + " does not exist");
+  out->payload = ReadCheckpointPayload(path, kCheckpointFormatVersion);
+  try {
+    out->archive.load_from(out->payload.bytes.data(), out->payload.bytes.size());
+  } catch (const c10::Error& e) {
+    throw std::runtime_error("checkpoint " + path + " refused: not a readable LibTorch archive: " +
+                             e.what_without_backtrace());
+  }
+}
+
+void LoadModule(OpenedCheckpoint& file, const std::string& key,
                 const std::shared_ptr<torch::nn::Module>& module, const std::string& path) {
   if (!module) return;
+  LoadModuleChecked(file.archive, key, *module, path, file.payload.manifest);
+}
+
+bool HasModule(OpenedCheckpoint& file, const std::string& key) {
   torch::serialize::InputArchive sub;
-  if (!root.try_read(key, sub))
-    throw std::runtime_error("checkpoint " + path + ": missing module '" + key + "'");
-  module->load(sub);
+  return file.archive.try_read(key, sub);
 }
 
 void SaveOptimizer(torch::serialize::OutputArchive& root, const std::string& key,
@@ -96,7 +127,8 @@ CheckpointMeta CheckpointMeta::FromJson(const std::string& text, const std::stri
   try {
     const json j = json::parse(text);
     m.format_version = j.at("format_version").get<int>();
-    if (m.format_version != kCheckpointFormatVersion) return m;  // the caller refuses it
+    if (m.format_version != kCheckpointFormatVersion && m.format_version != 1)
+      return m;  // the caller refuses it
     m.config = P2iConfig::FromYamlString(j.at("config_yaml").get<std::string>(), source);
     m.normalizer.t_min = j.at("pose_t_min").get<std::array<double, 3>>();
     m.normalizer.t_max = j.at("pose_t_max").get<std::array<double, 3>>();
@@ -156,73 +188,95 @@ void WriteFileAtomically(const std::string& path,
 void SaveCheckpoint(const std::string& path, const CheckpointMeta& meta, Networks& nets,
                     const Optimizers& optimizers) {
   torch::serialize::OutputArchive archive;
+  std::map<std::string, int64_t> manifest;
   archive.write("meta", c10::IValue(meta.ToJson()));
   if (!meta.inference_only) {
-    SaveModule(archive, "G", nets.g.ptr());
-    if (nets.g_ema) SaveModule(archive, "G_EMA", nets.g_ema.ptr());
+    SaveModule(archive, "G", nets.g.ptr(), &manifest);
+    if (nets.g_ema) SaveModule(archive, "G_EMA", nets.g_ema.ptr(), &manifest);
   } else {
-    SaveModule(archive, "G", nets.Serving().ptr());  // the G that renders
+    SaveModule(archive, "G", nets.Serving().ptr(), &manifest);  // the G that renders
   }
-  if (nets.e) SaveModule(archive, "ENET", nets.e.ptr());
+  if (nets.e) SaveModule(archive, "ENET", nets.e.ptr(), &manifest);
   if (!meta.inference_only) {
-    if (nets.d) SaveModule(archive, "D", nets.d.ptr());
+    if (nets.d) SaveModule(archive, "D", nets.d.ptr(), &manifest);
     SaveOptimizer(archive, "opt_G", optimizers.g);
     SaveOptimizer(archive, "opt_D", optimizers.d);
     SaveOptimizer(archive, "opt_ENET", optimizers.e);
     auto gen = at::detail::getDefaultCPUGenerator();
     archive.write("rng_state", gen.get_state());
   }
+  std::string zip;
+  try {
+    archive.save_to([&zip](const void* data, size_t size) {
+      zip.append(static_cast<const char*>(data), size);
+      return size;
+    });
+  } catch (const c10::Error& e) {
+    throw std::runtime_error("cannot serialise checkpoint " + path + ": " + e.what_without_backtrace());
+  }
+  // Format 2: a header line with the payload's size, CRC-32 and tensor manifest, then the zip
+  // (checkpoint_integrity.h). The header's version is meta.format_version (tests write others).
+  const std::string bytes = EncodeCheckpointFile(meta.format_version, zip, manifest);
   WriteFileAtomically(path, [&](const std::string& temp) {
-    try {
-      archive.save_to(temp);
-    } catch (const c10::Error& e) {
-      throw std::runtime_error("cannot write checkpoint " + temp + ": " + e.what_without_backtrace());
-    }
+    std::ofstream out(temp, std::ios::binary | std::ios::trunc);
+    out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+    out.flush();
+    if (!out) throw std::runtime_error("cannot write checkpoint " + temp + " (disk full?)");
+    out.close();
+    if (!out) throw std::runtime_error("cannot write checkpoint " + temp + " (disk full?)");
   });
 }
 
-CheckpointMeta ReadCheckpointMeta(const std::string& path) {
-  if (!std::filesystem::exists(path))
-    throw std::runtime_error("checkpoint " + path + " does not exist");
-  torch::serialize::InputArchive archive;
+namespace {
+
+CheckpointMeta MetaOf(OpenedCheckpoint& file, const std::string& path) {
   c10::IValue meta_value;
   try {
-    archive.load_from(path);
-    if (!archive.try_read("meta", meta_value))
+    if (!file.archive.try_read("meta", meta_value) || !meta_value.isString())
       throw std::runtime_error("checkpoint " + path + " has no metadata: not a p2i checkpoint");
   } catch (const c10::Error& e) {
     throw std::runtime_error("cannot read checkpoint " + path + ": " + e.what_without_backtrace());
   }
   CheckpointMeta meta = CheckpointMeta::FromJson(meta_value.toStringRef(), path);
-  if (meta.format_version != kCheckpointFormatVersion)
+  // Format 1 files (the bare zip) say 1 in their metadata; format 2 files say 2 in both.
+  const int expected = file.payload.container_version == 1 ? 1 : kCheckpointFormatVersion;
+  if (meta.format_version != expected)
     throw std::runtime_error("checkpoint " + path + " has format version " +
                              std::to_string(meta.format_version) + " but this build reads version " +
                              std::to_string(kCheckpointFormatVersion) +
-                             ": retrain it with this build (p2i train) or use the p2i build that "
-                             "wrote it");
+                             " (and 1): retrain it with this build (p2i train) or use the p2i "
+                             "build that wrote it");
   return meta;
+}
+
+}  // namespace
+
+CheckpointMeta ReadCheckpointMeta(const std::string& path) {
+  OpenedCheckpoint file;
+  OpenCheckpoint(path, &file);
+  return MetaOf(file, path);
 }
 
 CheckpointMeta LoadCheckpoint(const std::string& path, Networks& nets,
                               const Optimizers& optimizers, bool restore_rng) {
-  CheckpointMeta meta = ReadCheckpointMeta(path);
+  OpenedCheckpoint file;
+  OpenCheckpoint(path, &file);
+  CheckpointMeta meta = MetaOf(file, path);
   if (meta.inference_only)
     throw std::runtime_error("checkpoint " + path + " is an inference checkpoint (p2i export): it "
                              "has no discriminator, optimiser or RNG state to resume from; use it "
                              "for rendering or as a warm start (p2i train --init-from)");
-  torch::serialize::InputArchive archive;
   try {
-    archive.load_from(path);
-    LoadModule(archive, "G", nets.g.ptr(), path);
-    if (nets.g_ema) LoadModule(archive, "G_EMA", nets.g_ema.ptr(), path);
-    if (nets.d) LoadModule(archive, "D", nets.d.ptr(), path);
-    if (nets.e) LoadModule(archive, "ENET", nets.e.ptr(), path);
-    LoadOptimizer(archive, "opt_G", optimizers.g);
-    LoadOptimizer(archive, "opt_D", optimizers.d);
-    LoadOptimizer(archive, "opt_ENET", optimizers.e);
+    LoadModule(file, "G", nets.g.ptr(), path);
+    if (nets.g_ema) LoadModule(file, "G_EMA", nets.g_ema.ptr(), path);
+    if (nets.d) LoadModule(file, "D", nets.d.ptr(), path);
+    if (nets.e) LoadModule(file, "ENET", nets.e.ptr(), path);
+    LoadOptimizer(file.archive, "opt_G", optimizers.g);
+    LoadOptimizer(file.archive, "opt_D", optimizers.d);
+    LoadOptimizer(file.archive, "opt_ENET", optimizers.e);
     if (restore_rng) {
       torch::Tensor state;
-      archive.read("rng_state", state);
+      file.archive.read("rng_state", state);
       auto gen = at::detail::getDefaultCPUGenerator();
       gen.set_state(state);
     }
@@ -234,19 +288,18 @@ CheckpointMeta LoadCheckpoint(const std::string& path, Networks& nets,
 }
 
 CheckpointMeta LoadWeights(const std::string& path, Networks& nets, bool with_enet) {
-  CheckpointMeta meta = ReadCheckpointMeta(path);
-  torch::serialize::InputArchive archive;
+  OpenedCheckpoint file;
+  OpenCheckpoint(path, &file);
+  CheckpointMeta meta = MetaOf(file, path);
   try {
-    archive.load_from(path);
-    LoadModule(archive, "G", nets.g.ptr(), path);
+    LoadModule(file, "G", nets.g.ptr(), path);
     if (nets.g_ema) {
-      torch::serialize::InputArchive sub;
-      if (archive.try_read("G_EMA", sub))
-        nets.g_ema->load(sub);
+      if (HasModule(file, "G_EMA"))
+        LoadModule(file, "G_EMA", nets.g_ema.ptr(), path);
       else
         CopyWeights(*nets.g, *nets.g_ema);
     }
-    if (nets.e && with_enet) LoadModule(archive, "ENET", nets.e.ptr(), path);
+    if (nets.e && with_enet) LoadModule(file, "ENET", nets.e.ptr(), path);
   } catch (const c10::Error& e) {
     throw std::runtime_error("cannot load checkpoint " + path + ": " + e.what_without_backtrace() +
                              " (was it written for another config?)");
@@ -255,16 +308,12 @@ CheckpointMeta LoadWeights(const std::string& path, Networks& nets, bool with_en
 }
 
 CheckpointMeta LoadServingWeights(const std::string& path, Networks& nets) {
-  CheckpointMeta meta = ReadCheckpointMeta(path);
-  torch::serialize::InputArchive archive;
+  OpenedCheckpoint file;
+  OpenCheckpoint(path, &file);
+  CheckpointMeta meta = MetaOf(file, path);
   try {
-    archive.load_from(path);
-    torch::serialize::InputArchive sub;
-    if (archive.try_read("G_EMA", sub))
-      nets.g->load(sub);
-    else
-      LoadModule(archive, "G", nets.g.ptr(), path);
-    if (nets.e) LoadModule(archive, "ENET", nets.e.ptr(), path);
+    LoadModule(file, HasModule(file, "G_EMA") ? "G_EMA" : "G", nets.g.ptr(), path);
+    if (nets.e) LoadModule(file, "ENET", nets.e.ptr(), path);
   } catch (const c10::Error& e) {
     throw std::runtime_error("cannot load checkpoint " + path + ": " + e.what_without_backtrace() +
                              " (was it written for another config?)");

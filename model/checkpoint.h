@@ -19,7 +19,7 @@ namespace p2i::model {
 
 /// Bumped whenever the file layout or a module's parameter layout changes. Loading a checkpoint
 /// of another version is refused.
-constexpr int kCheckpointFormatVersion = 1;
+constexpr int kCheckpointFormatVersion = 2;
 
 /// The checkpoint's metadata (stored as JSON inside the file).
 struct CheckpointMeta {

@@ -60,6 +60,29 @@ struct P2iSynthesizer::Impl {
     }
     return view;
   }
+
+  void ProbeOrThrow() {
+    // One view at the middle of the training poses, looking along the identity rotation: weights
+    // that are finite can still produce NaN or inf (overflow); such a model is refused here, at
+    // start-up and before a hot swap, instead of serving garbage.
+    c10::InferenceMode guard;
+    const auto& n = meta.normalizer;
+    const Eigen::Vector3d mid(0.5 * (n.t_min[0] + n.t_max[0]), 0.5 * (n.t_min[1] + n.t_max[1]),
+                              0.5 * (n.t_min[2] + n.t_max[2]));
+    FillPose(scene::Pose(mid, Eigen::Quaterniond::Identity()), input.data_ptr<float>());
+    auto out = nets->g->forward(input);
+    if (use_enet) out = nets->e->forward(out);
+    const int r = meta.config.resolution;
+    if (out.dim() != 4 || out.size(0) != 1 || out.size(2) != r || out.size(3) != r)
+      throw std::runtime_error("checkpoint " + path + " refused: the probe view has shape " +
+                               c10::str(out.sizes()) + ", expected 1 x C x " + std::to_string(r) +
+                               " x " + std::to_string(r));
+    const int64_t bad = out.numel() - torch::isfinite(out).sum().item<int64_t>();
+    if (bad > 0)
+      throw std::runtime_error("checkpoint " + path + " refused: its probe view (the middle "
+                               "of the training poses) has " + std::to_string(bad) +
+                               " non-finite pixel value(s): a diverged or damaged model");
+  }
 };
 
 P2iSynthesizer::P2iSynthesizer(const std::string& checkpoint_path,
@@ -82,6 +105,7 @@ P2iSynthesizer::P2iSynthesizer(const std::string& checkpoint_path,
   impl_->nets->g->eval();
   if (impl_->nets->e) impl_->nets->e->eval();
   impl_->input = torch::zeros({1, 7});
+  impl_->ProbeOrThrow();
 }
 
 P2iSynthesizer::~P2iSynthesizer() = default;
