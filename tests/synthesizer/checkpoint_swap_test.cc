@@ -57,7 +57,7 @@ TEST_CASE("damaged checkpoints are refused at synthesizer start-up and on hot sw
   const std::pair<const char*, const char*> damages[] = {
       {"torn", "truncated"},   {"random", "not a p2i checkpoint"},
       {"empty", "empty"},      {"version", "format version 99"},
-      {"record", "record cut short"}, {"nan", "non-finite"},
+      {"record", "refused"}, {"nan", "non-finite"},
   };
   uint64_t version = 1;
   uint64_t failures = 0;
