@@ -12,7 +12,7 @@
 
 #include "model/model_profiling.h"
 #include "model/p2i_config.h"
-#include "nodes/camera/msg_convert.h"
+#include "convert/pose.h"
 #include "nodes/synthesizer/method_loader.h"
 #include "nodes/synthesizer/synthesizer_core.h"
 #include "tests/checkpoint_tamper.h"
@@ -85,7 +85,7 @@ TEST_CASE("damaged checkpoints are refused at synthesizer start-up and on hot sw
   REQUIRE(core.WaitForVersion(version, std::chrono::seconds(20)));
   msgs::pb::RenderRequest req;
   req.set_request_id(1);
-  ToMsg(scene::Pose::Identity(), req.add_poses());
+  convert::ToMsg(scene::Pose::Identity(), req.add_poses());
   msgs::RenderReplyMsg reply;
   core.HandleRender(req, SynthesizerCore::Clock::now(), &reply);
   CHECK(reply.meta.ok());
