@@ -246,6 +246,9 @@ CheckpointMeta MetaOf(OpenedCheckpoint& file, const std::string& path) {
                              std::to_string(kCheckpointFormatVersion) +
                              " (and 1): retrain it with this build (p2i train) or use the p2i "
                              "build that wrote it");
+  // In memory the metadata describes the weights, not the file they came from: a format-1 file
+  // (e.g. the shipped demo model used for a warm start) is saved again as the current format.
+  meta.format_version = kCheckpointFormatVersion;
   return meta;
 }
 
