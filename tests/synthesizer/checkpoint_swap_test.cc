@@ -16,37 +16,18 @@
 #include "nodes/synthesizer/method_loader.h"
 #include "nodes/synthesizer/synthesizer_core.h"
 #include "tests/checkpoint_tamper.h"
+#include "tests/trainer/trainer_test_util.h"
 
 namespace fs = std::filesystem;
 
 namespace p2i::nodes {
-namespace {
-
-model::P2iConfig Tiny() {
-  model::P2iConfig c;
-  c.name = "tiny";
-  c.resolution = 32;
-  c.g_schedule = "custom";
-  c.g_widths = {16, 16, 8, 8};
-  c.g_fc_width = 16;
-  c.d_base_width = 8;
-  c.d_max_width = 16;
-  c.latent_dim = 32;
-  c.mapping_width = 16;
-  c.enet_width = 8;
-  c.enet_blocks = 1;
-  c.Validate();
-  return c;
-}
-
-}  // namespace
 
 TEST_CASE("damaged checkpoints are refused at synthesizer start-up and on hot swap", "[unit]") {
   const fs::path dir = fs::temp_directory_path() / ("p2i_swap_ckpt_" + std::to_string(::getpid()));
   fs::remove_all(dir);
   fs::create_directories(dir);
   const std::string good = (dir / "good.pt").string();
-  model::WriteUntrainedCheckpoint(Tiny(), good);
+  model::WriteUntrainedCheckpoint(trainer::testing::TinyConfig(), good);
   const std::string good_bytes = testing::ReadBytes(good);
   LoaderOptions lo;
   lo.threads = 1;
