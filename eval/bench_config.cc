@@ -60,14 +60,29 @@ std::string OverrideMap(const Reader& r, const YAML::Node& n, const std::string&
   return e.c_str();
 }
 
-const std::set<std::string> kSettings = {"a1", "a3", "a10", "a20", "b", "c"};
+scene::EvalSetting Setting(const Reader& r, const YAML::Node& n, const std::string& what) {
+  const std::string name = r.String(n, what);
+  try {
+    return scene::EvalSetting::Parse(name);
+  } catch (const std::invalid_argument& e) {
+    r.Fail(n, std::string(e.what()) + " in " + what);
+  }
+}
+
+std::vector<scene::EvalSetting> Settings(const Reader& r, const YAML::Node& n,
+                                         const std::string& what) {
+  if (n.IsScalar()) return {Setting(r, n, what)};
+  if (!n.IsSequence()) r.Fail(n, what + " must be a setting or a list of settings");
+  std::vector<scene::EvalSetting> out;
+  for (const auto& e : n) out.push_back(Setting(r, e, what));
+  return out;
+}
+
+bool Contains(const std::vector<scene::EvalSetting>& v, const scene::EvalSetting& x) {
+  return std::find(v.begin(), v.end(), x) != v.end();
+}
 
 }  // namespace
-
-int HeldOutOf(const std::string& setting) {
-  if (setting.size() > 1 && setting[0] == 'a') return std::stoi(setting.substr(1));
-  return 0;
-}
 
 std::string ResolvePreset(const std::string& preset, const std::string& config_dir) {
   std::vector<std::string> tried;
@@ -143,16 +158,11 @@ BenchConfig BenchConfig::FromYamlString(const std::string& text, const std::stri
   if (ds["specular"]) d.specular = Bool(r, ds["specular"], "dataset.specular");
 
   // --- settings ---
-  c.settings = Strings(r, r.Require(root, "settings", "the bench config"), "settings");
-  for (const auto& s : c.settings)
-    if (kSettings.count(s) == 0)
-      r.Fail(root["settings"], "unknown setting '" + s +
-                                   "' in settings (allowed: a1, a3, a10, a20 = (a) with N held "
-                                   "out, b = adjacent trajectory, c = cross trajectory)");
+  c.settings = Settings(r, r.Require(root, "settings", "the bench config"), "settings");
   if (root["period"]) c.period = Int(r, root["period"], "period", 2);
   for (const auto& s : c.settings)
-    if (HeldOutOf(s) >= c.period)
-      r.Fail(root["settings"], "setting " + s + " holds out N >= period (" +
+    if (s.held_out >= c.period)
+      r.Fail(root["settings"], "setting " + s.Name() + " holds out N >= period (" +
                                    std::to_string(c.period) + " frames): raise 'period'");
   if (root["split_b"]) {
     const YAML::Node b = root["split_b"];
@@ -185,7 +195,7 @@ BenchConfig BenchConfig::FromYamlString(const std::string& text, const std::stri
       }
     } else {
       r.CheckKeys(s, {"name", "resolution", "model", "settings"}, "a size");
-      if (s["settings"]) size.settings = Strings(r, s["settings"], "size settings");
+      if (s["settings"]) size.settings = Settings(r, s["settings"], "size settings");
       size.resolution = Int(r, r.Require(s, "resolution", "a size"), "size resolution", 16);
       size.name = s["name"] ? r.String(s["name"], "size name") : "r" + std::to_string(size.resolution);
       size.model_yaml = OverrideMap(r, s["model"], "size '" + size.name + "' model");
@@ -212,16 +222,27 @@ BenchConfig BenchConfig::FromYamlString(const std::string& text, const std::stri
   std::set<std::string> names;
   for (const auto& m : methods) {
     MethodSpec spec;
+    YAML::Node options;  // the method's own keys (model::MethodInfo::option_keys)
     if (m.IsScalar()) {
       spec.name = m.as<std::string>();
       spec.type = spec.name;
     } else {
-      r.CheckKeys(m,
-                  {"name", "type", "preset", "config", "steps", "enet_steps", "batch_size", "seeds",
-                   "seed_settings", "seed_sizes", "max_train_s", "k", "fill_holes"},
-                  "a method");
       spec.name = r.String(r.Require(m, "name", "a method"), "method name");
       spec.type = m["type"] ? r.String(m["type"], "method type") : spec.name;
+    }
+    const model::MethodInfo* info = model::FindMethod(spec.type);
+    if (info == nullptr)
+      r.Fail(m, "method '" + spec.name + "' has unknown type '" + spec.type + "' (allowed: " +
+                    model::MethodNames() + ")");
+    spec.type = info->name;
+    spec.learned = info->learned;
+    if (m.IsMap()) {
+      std::set<std::string> keys = {"name", "type"};
+      if (info->learned)
+        keys.insert({"preset", "config", "steps", "enet_steps", "batch_size", "seeds",
+                     "seed_settings", "seed_sizes", "max_train_s"});
+      keys.insert(info->option_keys.begin(), info->option_keys.end());
+      r.CheckKeys(m, keys, "method '" + spec.name + "' (type " + spec.type + ")");
       if (m["preset"]) spec.preset = r.String(m["preset"], "method preset");
       spec.config_yaml = OverrideMap(r, m["config"], "method '" + spec.name + "' config");
       if (m["steps"]) spec.steps = Int(r, m["steps"], "method steps", 0);
@@ -230,22 +251,24 @@ BenchConfig BenchConfig::FromYamlString(const std::string& text, const std::stri
       if (m["seeds"]) {
         for (const auto& s : m["seeds"]) spec.seeds.push_back(Int(r, s, "method seeds", 0));
       }
-      if (m["seed_settings"]) spec.seed_settings = Strings(r, m["seed_settings"], "method seed_settings");
+      if (m["seed_settings"])
+        spec.seed_settings = Settings(r, m["seed_settings"], "method seed_settings");
       if (m["seed_sizes"]) spec.seed_sizes = Strings(r, m["seed_sizes"], "method seed_sizes");
       if (m["max_train_s"]) {
         spec.max_train_s = r.Double(m["max_train_s"], "method max_train_s");
         if (spec.max_train_s < 0) r.Fail(m["max_train_s"], "method max_train_s must be >= 0");
       }
-      if (m["k"]) spec.warp_k = Int(r, m["k"], "method k", 1);
-      if (m["fill_holes"]) spec.warp_fill_holes = Bool(r, m["fill_holes"], "method fill_holes");
+      for (const auto& key : info->option_keys)
+        if (m[key]) options[key] = m[key];
     }
-    if (spec.type == "cnn_baseline") spec.type = "cnn";
-    if (spec.type == "p2i_net") spec.type = "p2i";
-    if (spec.type != "nearest" && spec.type != "warp" && spec.type != "p2i" && spec.type != "cnn")
-      r.Fail(m, "method '" + spec.name + "' has unknown type '" + spec.type +
-                    "' (allowed: nearest, warp, p2i, cnn)");
+    if (options.size() > 0) {
+      YAML::Emitter e;
+      e << options;
+      spec.options_yaml = e.c_str();
+    }
+    spec.make = info->configure(options, source + " (method '" + spec.name + "')");
     if (spec.IsLearned()) {
-      if (spec.preset.empty()) spec.preset = spec.type == "cnn" ? "cnn_baseline" : "default";
+      if (spec.preset.empty()) spec.preset = info->default_preset;
       try {
         spec.preset = ResolvePreset(spec.preset, config_dir);
       } catch (const std::exception& e) {
@@ -268,13 +291,16 @@ BenchConfig BenchConfig::FromYamlString(const std::string& text, const std::stri
     if (s["rotations_deg"]) st.rotations_deg = Doubles(r, s["rotations_deg"], "stability.rotations_deg");
     if (s["poses"]) st.poses = Int(r, s["poses"], "stability.poses", 1);
     if (s["threshold_db"]) st.threshold_db = r.Double(s["threshold_db"], "stability.threshold_db");
-    if (s["setting"]) st.setting = r.String(s["setting"], "stability.setting");
-    if (s["size"]) st.size = r.String(s["size"], "stability.size");
   }
-  if (c.stability.setting.empty()) c.stability.setting = c.settings.front();
+  const YAML::Node st_node = root["stability"];
+  c.stability.setting = st_node && st_node["setting"]
+                            ? Setting(r, st_node["setting"], "stability.setting")
+                            : c.settings.front();
+  if (st_node && st_node["size"]) c.stability.size = r.String(st_node["size"], "stability.size");
   if (c.stability.size.empty()) c.stability.size = c.sizes.front().name;
-  if (std::find(c.settings.begin(), c.settings.end(), c.stability.setting) == c.settings.end())
-    r.Fail(root["stability"], "stability.setting '" + c.stability.setting + "' is not in settings");
+  if (!Contains(c.settings, c.stability.setting))
+    r.Fail(root["stability"],
+           "stability.setting '" + c.stability.setting.Name() + "' is not in settings");
   if (!c.FindSize(c.stability.size))
     r.Fail(root["stability"], "stability.size '" + c.stability.size + "' is not in sizes");
 
@@ -283,7 +309,6 @@ BenchConfig BenchConfig::FromYamlString(const std::string& text, const std::stri
     const YAML::Node a = root["auto_size"];
     r.CheckKeys(a, {"method", "setting", "margin_db"}, "auto_size");
     if (a["method"]) c.auto_size.method = r.String(a["method"], "auto_size.method");
-    if (a["setting"]) c.auto_size.setting = r.String(a["setting"], "auto_size.setting");
     if (a["margin_db"]) c.auto_size.margin_db = r.Double(a["margin_db"], "auto_size.margin_db");
     if (c.auto_size.margin_db < 0) r.Fail(a, "auto_size.margin_db must be >= 0");
   }
@@ -293,18 +318,23 @@ BenchConfig BenchConfig::FromYamlString(const std::string& text, const std::stri
         c.auto_size.method = m.name;
         break;
       }
-  if (c.auto_size.setting.empty()) c.auto_size.setting = c.settings.front();
+  const YAML::Node as_node = root["auto_size"];
+  c.auto_size.setting = as_node && as_node["setting"]
+                            ? Setting(r, as_node["setting"], "auto_size.setting")
+                            : c.settings.front();
   if (!c.auto_size.method.empty() && !c.FindMethod(c.auto_size.method))
     r.Fail(root["auto_size"], "auto_size.method '" + c.auto_size.method + "' is not in methods");
 
   for (const auto& s : c.sizes)
     for (const auto& x : s.settings)
-      if (std::find(c.settings.begin(), c.settings.end(), x) == c.settings.end())
-        r.Fail(sizes, "size '" + s.name + "' names setting '" + x + "' which is not in settings");
+      if (!Contains(c.settings, x))
+        r.Fail(sizes, "size '" + s.name + "' names setting '" + x.Name() +
+                          "' which is not in settings");
   for (const auto& m : c.methods)
     for (const auto& x : m.seed_settings)
-      if (std::find(c.settings.begin(), c.settings.end(), x) == c.settings.end())
-        r.Fail(methods, "method '" + m.name + "' seed_settings names '" + x + "' which is not in settings");
+      if (!Contains(c.settings, x))
+        r.Fail(methods, "method '" + m.name + "' seed_settings names '" + x.Name() +
+                            "' which is not in settings");
 
   for (const auto& m : c.methods)
     for (const auto& x : m.seed_sizes)
@@ -342,8 +372,8 @@ model::P2iConfig BenchConfig::ModelConfig(const MethodSpec& method, const SizeSp
   if (enet >= 0) node["steps_phase2"] = enet;
   if (method.batch_size > 0) node["batch_size"] = method.batch_size;
   node["seed"] = seed;
-  if (method.type == "cnn") node["model"] = "cnn_baseline";
-  if (method.type == "p2i") node["model"] = "p2i_net";
+  const std::string& trained = model::GetMethod(method.type).trainer_model;
+  if (!trained.empty()) node["model"] = trained;
   YAML::Emitter e;
   e << node;
   return model::P2iConfig::FromYamlString(
@@ -356,9 +386,9 @@ std::vector<int> BenchConfig::SeedsOf(const MethodSpec& method) const {
   return method.seeds.empty() ? seeds : method.seeds;
 }
 
-std::vector<int> BenchConfig::RunsOf(const MethodSpec& method, const std::string& setting,
+std::vector<int> BenchConfig::RunsOf(const MethodSpec& method, const scene::EvalSetting& setting,
                                      const SizeSpec& size) const {
-  auto has = [](const std::vector<std::string>& v, const std::string& x) {
+  auto has = [](const auto& v, const auto& x) {
     return v.empty() || std::find(v.begin(), v.end(), x) != v.end();
   };
   if (!has(size.settings, setting)) return {};

@@ -6,8 +6,10 @@
 #include <string>
 #include <vector>
 
+#include "model/method_registry.h"
 #include "model/p2i_config.h"
 #include "scene/sim_sensor_options.h"
+#include "scene/splits.h"
 
 namespace p2i::eval {
 
@@ -37,7 +39,8 @@ struct DatasetSpec {
 /// One method row of the tables.
 struct MethodSpec {
   std::string name;      ///< unique; the row label
-  std::string type;      ///< nearest | warp | p2i | cnn
+  std::string type;      ///< a canonical name of model/method_registry.h (aliases resolved)
+  bool learned = false;  ///< model::MethodInfo::learned of `type`
   std::string preset;    ///< learned: preset file resolved to a path
   std::string config_yaml;  ///< learned: P2iConfig overrides of this method (YAML map text)
   int steps = -1;        ///< learned: phase-1 steps (-1 = the preset's)
@@ -48,12 +51,15 @@ struct MethodSpec {
   double max_train_s = 0.0;
   std::vector<int> seeds;   ///< learned: overrides the global seeds (e.g. 3 seeds for P2I-NET)
   /// Settings on which all seeds run; elsewhere only the first seed (empty = every setting).
-  std::vector<std::string> seed_settings;
+  std::vector<scene::EvalSetting> seed_settings;
   /// Sizes at which all seeds run; elsewhere only the first seed (empty = every size).
   std::vector<std::string> seed_sizes;
-  int warp_k = 4;           ///< warp
-  bool warp_fill_holes = true;
-  bool IsLearned() const { return type == "p2i" || type == "cnn"; }
+  /// The method's own options (the entry's keys listed in MethodInfo::option_keys, e.g. warp's
+  /// k and fill_holes) as a YAML map text, "" for none; checked when the config is read.
+  std::string options_yaml;
+  /// The method configured with those options (MethodInfo::configure), set by FromYamlString.
+  model::MethodFactory make;
+  bool IsLearned() const { return learned; }
 };
 
 /// One rung of the size ladder: a resolution and P2iConfig overrides for learned methods.
@@ -61,7 +67,7 @@ struct SizeSpec {
   std::string name;
   int resolution = 128;
   std::string model_yaml;  ///< P2iConfig overrides (YAML map text), may be empty
-  std::vector<std::string> settings;  ///< run only on these settings (empty = every setting)
+  std::vector<scene::EvalSetting> settings;  ///< run only on these settings (empty = every one)
 };
 
 struct StabilitySpec {
@@ -70,13 +76,13 @@ struct StabilitySpec {
   std::vector<double> rotations_deg = {0.0, 2.5, 5.0, 10.0, 20.0, 40.0};
   int poses = 8;               ///< training poses the offsets start from
   double threshold_db = 20.0;  ///< "falls below X dB at distance D"
-  std::string setting;         ///< the trained models of this setting (default: the first)
+  scene::EvalSetting setting;  ///< the trained models of this setting (default: the first)
   std::string size;            ///< ... of this size (default: the first)
 };
 
 struct AutoSizeSpec {
   std::string method;     ///< default: the first learned method
-  std::string setting;    ///< default: the first setting
+  scene::EvalSetting setting;  ///< default: the first setting
   double margin_db = 0.5;
 };
 
@@ -84,7 +90,7 @@ struct BenchConfig {
   std::string source;  ///< the file it was read from
   std::string text;    ///< its text (hashed to recognise a resumable output folder)
   DatasetSpec dataset;
-  std::vector<std::string> settings;  ///< a1 a3 a10 a20 (setting a, N held out) b c
+  std::vector<scene::EvalSetting> settings;  ///< a1 a3 a10 a20 (setting a, N held out) b c
   int period = 100;                    ///< setting (a): frames per block
   std::string b_train, b_test;         ///< setting (b) sequences (default: first two)
   std::vector<std::string> c_train, c_test;  ///< setting (c) (default: middle one tests)
@@ -111,7 +117,7 @@ struct BenchConfig {
   /// The seeds of `method` at (setting, size); empty when the combination is not run (the size
   /// is restricted to other settings, or a non-learned method already ran at an earlier size of
   /// the same resolution: baselines do not depend on the model overrides).
-  std::vector<int> RunsOf(const MethodSpec& method, const std::string& setting,
+  std::vector<int> RunsOf(const MethodSpec& method, const scene::EvalSetting& setting,
                           const SizeSpec& size) const;
   const MethodSpec* FindMethod(const std::string& name) const;
   const SizeSpec* FindSize(const std::string& name) const;
@@ -119,8 +125,6 @@ struct BenchConfig {
   std::string Hash() const;
 };
 
-/// "a3" -> 3; 0 for b / c.
-int HeldOutOf(const std::string& setting);
 /// Resolves a preset name ("default" -> <source>/model/presets/default.yaml) or a path relative
 /// to `config_dir`. Throws std::runtime_error listing where it looked.
 std::string ResolvePreset(const std::string& preset, const std::string& config_dir);

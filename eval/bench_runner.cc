@@ -29,12 +29,10 @@
 #include "eval/results.h"
 #include "eval/stats.h"
 #include "eval/strips.h"
-#include "model/baseline_nearest.h"
-#include "model/baseline_warp.h"
 #include "model/coverage.h"
 #include "model/lpips.h"
+#include "model/method_registry.h"
 #include "model/metrics.h"
-#include "model/p2i_synthesizer.h"
 #include "model/trainer.h"
 #include "scene/capture.h"
 #include "scene/dataset_loader.h"
@@ -163,17 +161,17 @@ Data PrepareData(const BenchConfig& c, const std::string& out_dir, bool quiet) {
 }
 
 scene::Split MakeSplit(const BenchConfig& c, const scene::DatasetIndex& index,
-                       const std::string& setting) {
+                       const scene::EvalSetting& setting) {
   const auto seqs = index.Sequences();
   scene::Split split;
-  if (setting[0] == 'a') {
-    split = scene::MakeMissingFramesSplit(index, HeldOutOf(setting), c.period);
+  if (setting.split == scene::SplitSetting::kMissingFrames) {
+    split = scene::MakeMissingFramesSplit(index, setting.held_out, c.period);
     if (split.test.empty())
-      throw std::runtime_error(c.source + ": setting " + setting +
+      throw std::runtime_error(c.source + ": setting " + setting.Name() +
                                " holds out no frame (every sequence is shorter than period + N = " +
-                               std::to_string(c.period + HeldOutOf(setting)) +
+                               std::to_string(c.period + setting.held_out) +
                                " frames): lower 'period' or use more frames");
-  } else if (setting == "b") {
+  } else if (setting.split == scene::SplitSetting::kAdjacentTrajectory) {
     if (seqs.size() < 2 && c.b_train.empty())
       throw std::runtime_error(c.source + ": setting b needs 2 sequences; the data has " +
                                std::to_string(seqs.size()) + " (add split_b or trajectories)");
@@ -472,10 +470,10 @@ int RunBench(const BenchOptions& options) {
         for (const auto& m : c.methods) total += c.RunsOf(m, setting, size).size();
     for (const auto& setting : c.settings) {
       const scene::Split split = MakeSplit(c, data->index, setting);
-      split.ToYamlFile((fs::path(out_dir) / "splits" / (setting + ".yaml")).string());
+      split.ToYamlFile((fs::path(out_dir) / "splits" / (setting.Name() + ".yaml")).string());
       const auto test_ids = Subsample(split.test, static_cast<size_t>(c.max_test_views));
       const auto strip_ids = Subsample(test_ids, static_cast<size_t>(c.strip_views));
-      const std::string strip_dir = (fs::path(out_dir) / "strips" / setting).string();
+      const std::string strip_dir = (fs::path(out_dir) / "strips" / setting.Name()).string();
       const SizeSpec* strip_at = nullptr;  // strips at the first size that runs here
       for (const auto& size : c.sizes) {
         bool any_run = false;
@@ -504,7 +502,7 @@ int RunBench(const BenchOptions& options) {
             ResultRow row;
             row.method = m.name;
             row.method_type = m.type;
-            row.setting = setting;
+            row.setting = setting.Name();
             row.size = size.name;
             row.resolution = size.resolution;
             row.seed = seed;
@@ -519,16 +517,14 @@ int RunBench(const BenchOptions& options) {
 
             const auto t0 = Clock::now();
             std::unique_ptr<model::ViewSynthesizer> synth;
-            if (m.type == "nearest") {
-              synth = std::make_unique<model::NearestKeyframe>(train);
-            } else if (m.type == "warp") {
-              model::DepthWarpOptions wo;
-              wo.k = m.warp_k;
-              wo.fill_holes = m.warp_fill_holes;
-              synth = std::make_unique<model::DepthWarp>(train, wo);
+            model::MethodInputs inputs;
+            inputs.threads = threads;
+            if (!m.IsLearned()) {
+              inputs.training = std::make_shared<const scene::RgbdDataset>(train);
+              synth = m.make(inputs);
             } else {
               const model::P2iConfig mc = c.ModelConfig(m, size, seed);
-              const std::string run_dir = (fs::path(out_dir) / "runs" / m.name / setting /
+              const std::string run_dir = (fs::path(out_dir) / "runs" / m.name / setting.Name() /
                                            size.name / ("seed" + std::to_string(seed))).string();
               const std::string ckpt = model::Trainer::CheckpointPath(run_dir);
               if (!have_row || !fs::exists(ckpt)) {
@@ -544,7 +540,7 @@ int RunBench(const BenchOptions& options) {
                 }
                 if (!quiet)
                   std::printf("[%zu/%zu] training %s (%s) on %s, %d frames at %dx%d, seed %d: %d + %d steps...\n",
-                              done, total, m.name.c_str(), mc.model.c_str(), setting.c_str(),
+                              done, total, m.name.c_str(), mc.model.c_str(), setting.Name().c_str(),
                               row.train_frames, size.resolution, size.resolution, seed,
                               mc.steps_phase1, mc.IsBaseline() || !mc.enet ? 0 : mc.steps_phase2);
                 std::fflush(stdout);
@@ -566,9 +562,8 @@ int RunBench(const BenchOptions& options) {
                 row.train_steps_phase1 = tr.phase1_steps;
                 row.train_steps_phase2 = tr.phase2_steps;
               }
-              model::SynthesizerOptions so;
-              so.threads = threads;
-              synth = model::LoadSynthesizer(ckpt, so);
+              inputs.checkpoint_path = ckpt;
+              synth = m.make(inputs);
             }
             if (!m.IsLearned()) row.train_s = Since(t0);  // index building
             if (!have_row) {
@@ -577,7 +572,7 @@ int RunBench(const BenchOptions& options) {
               if (!quiet)
                 std::printf("[%zu/%zu] %s %s %s seed %d: PSNR %s dB, SSIM %s, LPIPS-Squeeze %s, "
                             "AbsRel %s, %s views/s (p50 %s ms, p99 %s ms), train %s s\n",
-                            done, total, m.name.c_str(), setting.c_str(), size.name.c_str(), seed,
+                            done, total, m.name.c_str(), setting.Name().c_str(), size.name.c_str(), seed,
                             Fixed(row.psnr).c_str(), Fixed(row.ssim, 3).c_str(),
                             Fixed(row.lpips, 3).c_str(), Fixed(row.depth_abs_rel, 3).c_str(),
                             Fixed(row.views_per_s, 1).c_str(), Fixed(row.latency_p50_ms, 1).c_str(),
@@ -614,21 +609,23 @@ int RunBench(const BenchOptions& options) {
   for (const auto& m : c.methods) strip_rows.push_back(m.name);
   if (c.strip_views > 0)
     for (const auto& setting : c.settings) {
-      const std::string dir = (fs::path(out_dir) / "strips" / setting).string();
-      const std::string png = (fs::path(out_dir) / "strips" / (setting + ".png")).string();
+      const std::string name = setting.Name();
+      const std::string dir = (fs::path(out_dir) / "strips" / name).string();
+      const std::string png = (fs::path(out_dir) / "strips" / (name + ".png")).string();
       if (ComposeStrip(dir, strip_rows, c.strip_views, png))
-        strips.emplace_back(setting, "strips/" + setting + ".png");
+        strips.emplace_back(name, "strips/" + name + ".png");
     }
 
   // Charts.
   ChartInputs ci;
   ci.rows = store.rows();
   // Charts show the settings in the paper's order whatever the run order was.
-  for (const char* s : {"a1", "a3", "a10", "a20", "b", "c"})
-    if (std::find(c.settings.begin(), c.settings.end(), s) != c.settings.end()) ci.settings.push_back(s);
+  std::vector<scene::EvalSetting> ordered = c.settings;
+  std::sort(ordered.begin(), ordered.end());
+  for (const auto& s : ordered) ci.settings.push_back(s.Name());
   for (const auto& m : c.methods) ci.methods.push_back(m.name);
   for (const auto& s : c.sizes) ci.sizes.push_back(s.name);
-  ci.primary_setting = c.auto_size.setting;  // the setting with the ladder and the seeds
+  ci.primary_setting = c.auto_size.setting.Name();  // the setting with the ladder and the seeds
   ci.stability = stability;
   ci.threshold_db = c.stability.threshold_db;
   const ChartOutputs charts = WriteCharts(ci, (fs::path(out_dir) / "charts").string());
@@ -637,20 +634,21 @@ int RunBench(const BenchOptions& options) {
   // Auto-size over the ladder.
   std::vector<std::string> auto_size;
   if (c.sizes.size() > 1 && !c.auto_size.method.empty()) {
+    const std::string auto_setting = c.auto_size.setting.Name();
     std::vector<SizeCandidate> cands;
     for (const auto& s : c.sizes) {
       SizeCandidate k;
       k.name = s.name;
-      k.psnr_db = MeanOver(store.rows(), c.auto_size.method, c.auto_size.setting, s.name, "psnr");
-      k.params = MeanOver(store.rows(), c.auto_size.method, c.auto_size.setting, s.name, "params");
-      k.flops = MeanOver(store.rows(), c.auto_size.method, c.auto_size.setting, s.name, "flops");
+      k.psnr_db = MeanOver(store.rows(), c.auto_size.method, auto_setting, s.name, "psnr");
+      k.params = MeanOver(store.rows(), c.auto_size.method, auto_setting, s.name, "params");
+      k.flops = MeanOver(store.rows(), c.auto_size.method, auto_setting, s.name, "flops");
       k.views_per_s =
-          MeanOver(store.rows(), c.auto_size.method, c.auto_size.setting, s.name, "views_per_s");
+          MeanOver(store.rows(), c.auto_size.method, auto_setting, s.name, "views_per_s");
       cands.push_back(k);
     }
     const AutoSizeChoice choice = ChooseAutoSize(cands, margin);
     std::ostringstream os;
-    os << "Ladder of `" << c.auto_size.method << "` on setting " << c.auto_size.setting
+    os << "Ladder of `" << c.auto_size.method << "` on setting " << auto_setting
        << " (margin " << Fixed(margin) << " dB PSNR):\n\n| size | PSNR dB | params | GFLOP/view | views/s |\n|---|---|---|---|---|\n";
     for (size_t i = 0; i < cands.size(); ++i)
       os << "| " << (int(i) == choice.index ? "**" + cands[i].name + "**" : cands[i].name) << " | "
@@ -660,7 +658,7 @@ int RunBench(const BenchOptions& options) {
     auto_size.push_back(os.str());
     scene::WriteFileAtomic(out_dir + "/auto_size.txt", choice.reason + "\n");
     if (options.auto_size) std::printf("auto-size (%s, setting %s): %s\n", c.auto_size.method.c_str(),
-                                       c.auto_size.setting.c_str(), choice.reason.c_str());
+                                       auto_setting.c_str(), choice.reason.c_str());
   } else if (options.auto_size) {
     std::printf("auto-size: needs at least 2 sizes and a learned method in the config\n");
   }

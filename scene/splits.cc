@@ -61,6 +61,43 @@ SplitSetting SplitSettingFromString(const std::string& name) {
                               "' (use missing_frames, adjacent_trajectory or cross_trajectory)");
 }
 
+std::string EvalSetting::Name() const {
+  switch (split) {
+    case SplitSetting::kMissingFrames:
+      return "a" + std::to_string(held_out);
+    case SplitSetting::kAdjacentTrajectory:
+      return "b";
+    case SplitSetting::kCrossTrajectory:
+      return "c";
+  }
+  return "?";
+}
+
+const std::vector<EvalSetting>& PaperSettings() {
+  static const std::vector<EvalSetting> all = {
+      {SplitSetting::kMissingFrames, 1},      {SplitSetting::kMissingFrames, 3},
+      {SplitSetting::kMissingFrames, 10},     {SplitSetting::kMissingFrames, 20},
+      {SplitSetting::kAdjacentTrajectory, 0}, {SplitSetting::kCrossTrajectory, 0}};
+  return all;
+}
+
+EvalSetting EvalSetting::Parse(const std::string& name) {
+  for (const EvalSetting& s : PaperSettings())
+    if (s.Name() == name) return s;
+  throw std::invalid_argument("unknown setting '" + name +
+                              "' (allowed: a1, a3, a10, a20 = (a) with N held out, "
+                              "b = adjacent trajectory, c = cross trajectory)");
+}
+
+bool EvalSetting::operator<(const EvalSetting& other) const {
+  if (split != other.split) return static_cast<int>(split) < static_cast<int>(other.split);
+  return held_out < other.held_out;
+}
+
+bool EvalSetting::operator==(const EvalSetting& other) const {
+  return split == other.split && held_out == other.held_out;
+}
+
 void Split::Validate() const {
   if (train.empty()) throw std::invalid_argument("split has no training frames");
   std::unordered_set<std::string> seen;

@@ -20,6 +20,26 @@ std::string ToString(SplitSetting setting);  ///< "missing_frames", "adjacent_tr
 /// Throws std::invalid_argument listing the valid names.
 SplitSetting SplitSettingFromString(const std::string& name);
 
+/// A setting as `p2i bench` configs and result tables name it: "a1", "a3", "a10", "a20" (setting
+/// (a) with N frames of every period held out), "b" (adjacent trajectory), "c" (cross
+/// trajectory). Parsed once, where a config is read; code compares values, not strings.
+/// A value type.
+struct EvalSetting {
+  SplitSetting split = SplitSetting::kMissingFrames;
+  int held_out = 1;  ///< (a): N frames held out per period; 0 for (b) and (c)
+
+  std::string Name() const;  ///< "a3", "b", "c"
+  /// Throws std::invalid_argument naming `name` and listing the six names.
+  static EvalSetting Parse(const std::string& name);
+  /// The paper's order: a1 < a3 < a10 < a20 < b < c.
+  bool operator<(const EvalSetting& other) const;
+  bool operator==(const EvalSetting& other) const;
+  bool operator!=(const EvalSetting& other) const { return !(*this == other); }
+};
+
+/// The six settings of the paper's tables, in its order.
+const std::vector<EvalSetting>& PaperSettings();
+
 /// Frame ids for training and testing plus the setting and its parameters. A value type.
 struct Split {
   SplitSetting setting = SplitSetting::kMissingFrames;

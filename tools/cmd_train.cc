@@ -10,10 +10,9 @@
 
 #include "model/p2i_config.h"
 #include "model/trainer.h"
+#include "scene/builtin_dataset.h"
 #include "scene/dataset_loader.h"
-#include "scene/sim_scene.h"
 #include "scene/splits.h"
-#include "scene/trajectory.h"
 #include "tools/command.h"
 
 namespace p2i::tools {
@@ -22,31 +21,6 @@ namespace {
 // Set by SIGINT / SIGTERM: the trainer saves a checkpoint at the current step and returns.
 volatile std::sig_atomic_t g_stop = 0;
 void OnStopSignal(int) { g_stop = 1; }
-
-// Frames rendered by the built-in simulator along a seeded random walk.
-scene::RgbdDataset RenderBuiltin(const std::string& name, int frames, int side, uint32_t seed) {
-  const scene::SimScene sim = scene::SimScene::BuiltIn(name);
-  scene::RandomWalkOptions walk;
-  walk.seed = seed;
-  walk.rate_hz = 5.0;
-  walk.duration = frames / walk.rate_hz;
-  const auto poses = scene::GenerateRandomWalk(walk, sim);
-  scene::RgbdDataset data;
-  auto& cam = data.camera;
-  const double f = side * 0.9, c = (side - 1) / 2.0;
-  cam.camera_name = "sim";
-  cam.image_width = cam.image_height = side;
-  cam.camera_matrix = {f, 0, c, 0, f, c, 0, 0, 1};
-  cam.projection_matrix = {f, 0, c, 0, 0, f, c, 0, 0, 0, 1, 0};
-  cam.distortion_coefficients.assign(5, 0.0);
-  for (size_t i = 0; i < poses.size() && static_cast<int>(i) < frames; ++i) {
-    scene::RgbdSample s = sim.Render(poses[i].pose, cam);
-    s.stamp = poses[i].stamp;
-    s.id = name + "/" + std::to_string(i);
-    data.frames.push_back(std::move(s));
-  }
-  return data;
-}
 
 // --world-size / --rank / --master ... (data-parallel ranks, docs/DISTRIBUTED.md).
 model::DistributedOptions g_distributed;
@@ -93,15 +67,18 @@ int RunTrain(const std::vector<std::string>& args) {
       ->required();
   app.add_option("--data", data,
                  "dataset folder (p2i capture, TUM RGB-D or 7-Scenes layout), builtin:NAME "
-                 "(render frames of a built-in sim scene along a random walk) or procedural "
-                 "(an analytic test room)")
+                 "(a built-in sim scene rendered along the default arm sweep with the sim "
+                 "camera, as the synthesizer's dataset parameter) or procedural (an analytic "
+                 "test room)")
       ->required();
   app.add_option("--split", split_file, "split YAML (p2i split / scene/splits.h): train on its train ids, validate on its test ids");
   app.add_option("--out", out_dir, "output directory")->required();
   app.add_option("--phase", phase, "0 = both phases (default), 1 or 2")->check(CLI::Range(0, 2));
   app.add_option("--steps", steps, "train each phase run up to this step (default: config)");
   app.add_option("--threads", threads, "LibTorch threads")->check(CLI::PositiveNumber);
-  app.add_option("--frames", frames, "builtin/procedural: number of frames to render");
+  app.add_option("--frames", frames,
+                 "builtin: at most this many frames, evenly spaced along the sweep; procedural: "
+                 "number of frames");
   app.add_option("--holdout-every", holdout_every,
                  "without --split: every N-th frame is held out for validation PSNR");
   app.add_flag("--resume", resume, "continue exactly from DIR/checkpoint.pt");
@@ -128,13 +105,13 @@ int RunTrain(const std::vector<std::string>& args) {
   }
   const model::P2iConfig config = model::P2iConfig::FromYamlFile(config_path);
   scene::RgbdDataset all;
-  const std::string builtin = "builtin:";
-  if (data.rfind(builtin, 0) == 0) {
-    const int side = std::max(128, config.resolution);
-    std::fprintf(stderr, "rendering %d frames of %s at %dx%d...\n", frames, data.c_str(), side,
-                 side);
-    all = RenderBuiltin(data.substr(builtin.size()), frames, side,
-                        static_cast<uint32_t>(config.seed));
+  if (scene::IsBuiltinSpec(data)) {
+    scene::BuiltinDatasetOptions o;
+    o.width = o.height = std::max(128, config.resolution);
+    o.max_frames = frames;
+    std::fprintf(stderr, "rendering up to %d frames of %s along the default arm sweep at %dx%d...\n",
+                 frames, data.c_str(), o.width, o.height);
+    all = scene::RenderBuiltinDataset(data, o);
   } else if (data == "procedural") {
     all = model::MakeProceduralDataset(frames, std::max(64, config.resolution));
   } else {

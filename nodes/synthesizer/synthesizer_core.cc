@@ -8,6 +8,7 @@
 
 #include "convert/image.h"
 #include "convert/pose.h"
+#include "model/method_registry.h"
 #include "msgs/codec.h"
 #include "scene/trajectory_io.h"
 
@@ -36,9 +37,9 @@ void CheckView(const model::View& v, const std::string& name) {
 }  // namespace
 
 void SynthesizerCoreOptions::Validate() const {
-  if (method != "p2i" && method != "cnn" && method != "nearest" && method != "warp") {
-    throw std::invalid_argument("synthesizer: method '" + method +
-                                "' is not one of p2i, cnn, nearest, warp");
+  if (model::FindMethod(method) == nullptr) {
+    throw std::invalid_argument("synthesizer: method '" + method + "' is not one of " +
+                                model::MethodNames());
   }
   if (max_poses < 1 || max_poses > msgs::kMaxBatch) {
     throw std::invalid_argument("synthesizer: max_poses must be in [1, " +

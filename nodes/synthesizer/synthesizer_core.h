@@ -26,7 +26,7 @@ namespace p2i::nodes {
 struct ModelSpec {
   uint64_t version = 0;         ///< 0 = the start-up model (checkpoint parameter)
   std::string checkpoint_path;  ///< learned methods; ignored by nearest/warp
-  std::string method;           ///< p2i | cnn | nearest | warp
+  std::string method;           ///< a name of model/method_registry.h
   /// TUM file with the poses the model was trained on (ModelVersion.poses_path): the coverage
   /// score of this model's views is computed against them. "" = the core's start-up coverage.
   std::string poses_path = "";  // (initializer: {version, path, method} stays warning-free)

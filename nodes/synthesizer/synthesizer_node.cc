@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "model/coverage.h"
+#include "model/method_registry.h"
 #include "nodes/synthesizer/method_loader.h"
 #include "nodes/synthesizer/synthesizer_options.h"
 
@@ -18,13 +19,15 @@ SynthesizerNode::SynthesizerNode(const runtime::NodeArgs& args)
   } catch (const std::invalid_argument& e) {
     throw runtime::StartupError(e.what());
   }
-  const SynthesizerCoreOptions& core_options = options.core;
+  SynthesizerCoreOptions& core_options = options.core;
   const std::string& checkpoint = options.checkpoint;
   const std::string& dataset = options.dataset;
-  learned_ = options.Learned();
   std::shared_ptr<const model::CoverageScorer> coverage;
   SynthesizerLoader loader;
   try {
+    const model::MethodInfo& method = model::GetMethod(core_options.method);
+    core_options.method = method.name;  // an alias ("p2i_net") serves under the canonical name
+    learned_ = method.learned;
     auto training = std::make_shared<const scene::RgbdDataset>(
         LoadTrainingData(dataset, options.width, options.height, /*with_frames=*/!learned_,
                          options.dataset_stride));

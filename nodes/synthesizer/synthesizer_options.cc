@@ -4,12 +4,16 @@
 
 #include <stdexcept>
 
+#include "model/method_registry.h"
+
 namespace p2i::nodes {
 
 SynthesizerOptions SynthesizerOptions::FromParameters(runtime::Parameters& params) {
   SynthesizerOptions o;  // the defaults, written once in the field initialisers
-  o.core.method = params.Declare<std::string>(
-      "method", o.core.method, "p2i | cnn (checkpoint) | nearest | warp (dataset)");
+  o.core.method =
+      params.Declare<std::string>("method", o.core.method,
+                                  "synthesis method (model/method_registry.h): " +
+                                      model::MethodNames());
   o.checkpoint = params.Declare<std::string>(
       "checkpoint", o.checkpoint, "learned methods: start-up checkpoint; '' = wait for model_version");
   o.dataset = params.Declare<std::string>(
@@ -23,9 +27,9 @@ SynthesizerOptions SynthesizerOptions::FromParameters(runtime::Parameters& param
       params.Declare<int>("dataset_stride", o.dataset_stride, "keep every N-th training frame");
   o.loader.threads =
       params.Declare<int>("threads", o.loader.threads, "torch threads (learned methods)");
-  o.loader.warp_k = params.Declare<int>("warp_k", o.loader.warp_k, "warp: source frames per view");
-  o.loader.warp_fill_holes =
-      params.Declare<bool>("warp_fill_holes", o.loader.warp_fill_holes, "warp: fill holes");
+  o.loader.method_options = params.Declare<std::string>(
+      "method_options", o.loader.method_options,
+      "the method's own options as a YAML map, e.g. '{k: 4}' for warp");
   o.core.max_poses =
       params.Declare<int>("max_poses", o.core.max_poses, "most poses in one RenderRequest");
   o.core.max_batch =
@@ -47,11 +51,15 @@ void SynthesizerOptions::Validate() const {
   at_least("height", height, 0);
   at_least("dataset_stride", dataset_stride, 1);
   at_least("threads", loader.threads, 1);
-  at_least("warp_k", loader.warp_k, 1);
   if ((width == 0) != (height == 0)) {
     throw std::invalid_argument("synthesizer: width and height must both be > 0 or both 0 (got " +
                                 std::to_string(width) + "x" + std::to_string(height) + ")");
   }
+}
+
+bool SynthesizerOptions::Learned() const {
+  const model::MethodInfo* method = model::FindMethod(core.method);
+  return method != nullptr && method->learned;
 }
 
 }  // namespace p2i::nodes

@@ -15,7 +15,7 @@ namespace p2i::nodes {
 /// type: thread-compatible.
 struct SynthesizerOptions {
   SynthesizerCoreOptions core;  ///< method, max_poses, max_batch
-  LoaderOptions loader;         ///< threads, warp_k, warp_fill_holes
+  LoaderOptions loader;         ///< threads, method_options
   /// Learned methods: the start-up checkpoint; "" = wait for a model_version.
   std::string checkpoint;
   /// Training data: frames for nearest/warp, poses for the coverage score (LoadTrainingData).
@@ -33,7 +33,8 @@ struct SynthesizerOptions {
   /// Throws std::invalid_argument naming the parameter and its bad value.
   void Validate() const;
 
-  bool Learned() const { return core.method == "p2i" || core.method == "cnn"; }
+  /// Whether core.method is a learned method of model/method_registry.h (false if unknown).
+  bool Learned() const;
 };
 
 }  // namespace p2i::nodes

@@ -47,9 +47,10 @@ TEST_CASE("Bench configs: the shipped ones parse, defaults and overrides apply",
   CHECK(c.methods[1].max_train_s == Approx(30));
   CHECK(c.SeedsOf(c.methods[0]) == std::vector<int>{1});        // deterministic: one seed
   CHECK(c.SeedsOf(c.methods[1]) == std::vector<int>{1, 2, 3});  // per-method seeds
-  CHECK(c.RunsOf(c.methods[1], "b", c.sizes[0]) == std::vector<int>{1, 2, 3});
-  CHECK(c.RunsOf(c.methods[1], "b", c.sizes[1]) == std::vector<int>{1});  // seed_sizes: [tiny]
-  CHECK(c.RunsOf(c.methods[0], "b", c.sizes[1]).empty());  // baseline: once per resolution
+  const auto b = p2i::scene::EvalSetting::Parse("b");
+  CHECK(c.RunsOf(c.methods[1], b, c.sizes[0]) == std::vector<int>{1, 2, 3});
+  CHECK(c.RunsOf(c.methods[1], b, c.sizes[1]) == std::vector<int>{1});  // seed_sizes: [tiny]
+  CHECK(c.RunsOf(c.methods[0], b, c.sizes[1]).empty());  // baseline: once per resolution
   const auto mc = c.ModelConfig(c.methods[1], c.sizes[1], 2);
   CHECK(mc.resolution == 32);
   CHECK(mc.g_widths == std::vector<int>{32, 32, 16, 8});
@@ -57,11 +58,48 @@ TEST_CASE("Bench configs: the shipped ones parse, defaults and overrides apply",
   CHECK(mc.steps_phase2 == 1);  // default: steps / 4
   CHECK(mc.batch_size == 2);
   CHECK(mc.seed == 2);
-  CHECK(c.stability.setting == "a1");
+  REQUIRE(c.settings.size() == 2);
+  CHECK(c.settings[0].split == p2i::scene::SplitSetting::kMissingFrames);
+  CHECK(c.settings[0].held_out == 1);
+  CHECK(c.settings[1].split == p2i::scene::SplitSetting::kAdjacentTrajectory);
+  CHECK(c.stability.setting.Name() == "a1");
+  CHECK(c.auto_size.setting.Name() == "a1");
   CHECK(c.auto_size.method == "p2i");
   CHECK(c.auto_size.margin_db == Approx(0.5));
-  CHECK(HeldOutOf("a20") == 20);
-  CHECK(HeldOutOf("c") == 0);
+}
+
+TEST_CASE("Bench config methods come from the registry: aliases, options, learned keys",
+          "[unit]") {
+  const BenchConfig c = BenchConfig::FromYamlString(R"(dataset: {scene: builtin:small_office}
+settings: [c, a3]
+methods:
+  - {name: w, type: warp, k: 2, fill_holes: false, z_tolerance: 0.1}
+  - {name: net, type: p2i_net, steps: 2}
+  - {name: base, type: cnn_baseline}
+sizes: [32]
+)",
+                                                    "my_bench.yaml");
+  REQUIRE(c.methods.size() == 3);
+  CHECK(c.methods[0].type == "warp");
+  CHECK_FALSE(c.methods[0].IsLearned());
+  CHECK(c.methods[0].options_yaml.find("z_tolerance") != std::string::npos);
+  CHECK(c.methods[0].make);
+  CHECK(c.methods[1].type == "p2i");  // alias resolved once, here
+  CHECK(c.methods[1].IsLearned());
+  CHECK(c.methods[2].type == "cnn");
+  CHECK(c.methods[2].preset.find("cnn_baseline.yaml") != std::string::npos);  // default preset
+  CHECK(c.ModelConfig(c.methods[2], c.sizes[0], 1).IsBaseline());
+  CHECK(c.stability.setting.Name() == "c");  // the first setting as written
+  // A learned-only key on a baseline, and a bad option value, stop at start-up.
+  CHECK(ErrorOf("dataset: {scene: x}\nsettings: [a1]\nmethods: [{name: nearest, steps: 3}]\n"
+                "sizes: [64]\n")
+            .find("steps") != std::string::npos);
+  CHECK(ErrorOf("dataset: {scene: x}\nsettings: [a1]\nmethods: [{name: warp, k: 0}]\n"
+                "sizes: [64]\n")
+            .find("my_bench.yaml") != std::string::npos);
+  const std::string e =
+      ErrorOf("dataset: {scene: x}\nsettings: [a1]\nmethods: [nerf]\nsizes: [64]\n");
+  CHECK(e.find("p2i, cnn, nearest, warp") != std::string::npos);  // the registry's list
 }
 
 TEST_CASE("Bench config errors name the key and the file", "[unit]") {

@@ -111,5 +111,28 @@ TEST_CASE("Split file round trip and validation", "[unit]") {
   CHECK_THROWS_WITH(SplitSettingFromString("random"), Catch::Contains("missing_frames"));
 }
 
+TEST_CASE("Evaluation settings a1..c parse once, print back and sort in the paper's order",
+          "[unit]") {
+  std::vector<std::string> names;
+  for (const EvalSetting& s : PaperSettings()) {
+    names.push_back(s.Name());
+    CHECK(EvalSetting::Parse(s.Name()) == s);
+  }
+  CHECK(names == std::vector<std::string>{"a1", "a3", "a10", "a20", "b", "c"});
+  const EvalSetting a10 = EvalSetting::Parse("a10");
+  CHECK(a10.split == SplitSetting::kMissingFrames);
+  CHECK(a10.held_out == 10);
+  CHECK(EvalSetting::Parse("b").split == SplitSetting::kAdjacentTrajectory);
+  CHECK(EvalSetting::Parse("c").held_out == 0);
+  std::vector<EvalSetting> mixed = {EvalSetting::Parse("c"), EvalSetting::Parse("a20"),
+                                    EvalSetting::Parse("b"), EvalSetting::Parse("a3")};
+  std::sort(mixed.begin(), mixed.end());  // a3 < a20 by N, not as text
+  CHECK(mixed[0].Name() == "a3");
+  CHECK(mixed[1].Name() == "a20");
+  CHECK(mixed[3].Name() == "c");
+  CHECK_THROWS_WITH(EvalSetting::Parse("a5"), Catch::Contains("'a5'") && Catch::Contains("a20"));
+  CHECK_THROWS_AS(EvalSetting::Parse("d"), std::invalid_argument);
+}
+
 }  // namespace
 }  // namespace p2i::scene

@@ -38,6 +38,15 @@ TEST_CASE("Built-in training data and the nearest/warp loaders", "[unit]") {
   CHECK(cv::countNonZero(w.depth > 0.0f) > 32 * 24 / 2);
 
   CHECK_THROWS_AS(MakeLoader("gan", {}, training), std::invalid_argument);
+  // The method's own options: read and checked at start-up, bad keys named.
+  LoaderOptions opts;
+  opts.method_options = "{k: 1, fill_holes: false}";
+  CHECK(MakeLoader("warp", opts, training)({0, "", "warp"})->Render(training->frames[3].pose)
+            .rgb.cols == 32);
+  opts.method_options = "{kk: 1}";
+  CHECK_THROWS_WITH(MakeLoader("warp", opts, training), Catch::Contains("kk"));
+  opts.method_options = "{k: [";
+  CHECK_THROWS_AS(MakeLoader("warp", opts, training), std::invalid_argument);
   auto no_frames = std::make_shared<const scene::RgbdDataset>(poses_only);
   CHECK_THROWS_AS(MakeLoader("warp", {}, no_frames), std::invalid_argument);
   CHECK_THROWS_AS(MakeLoader("nearest", {}, nullptr), std::invalid_argument);

@@ -18,7 +18,7 @@ TEST_CASE("SynthesizerOptions: declared defaults are the field initialisers", "[
   CHECK(o.core.max_poses == d.core.max_poses);
   // Every parameter is declared with a description and the struct's default (what --help shows).
   for (const char* name : {"method", "checkpoint", "dataset", "width", "height", "dataset_stride",
-                           "threads", "warp_k", "warp_fill_holes", "max_poses", "max_batch",
+                           "threads", "method_options", "max_poses", "max_batch",
                            "topic_mode"}) {
     INFO(name);
     REQUIRE(p.Declared().count(name) == 1);
@@ -35,14 +35,15 @@ TEST_CASE("SynthesizerOptions: parameters override; Validate shows the bad value
   p.SetOverride("method", "warp");
   p.SetOverride("width", "160");
   p.SetOverride("height", "120");
-  p.SetOverride("warp_k", "2");
+  p.SetOverride("method_options", "{k: 2}");
   p.SetOverride("topic_mode", "false");
   const SynthesizerOptions o = SynthesizerOptions::FromParameters(p);
   CHECK(o.core.method == "warp");
   CHECK_FALSE(o.Learned());
+  CHECK(SynthesizerOptions().Learned());  // p2i
   CHECK(o.width == 160);
   CHECK(o.height == 120);
-  CHECK(o.loader.warp_k == 2);
+  CHECK(o.loader.method_options == "{k: 2}");
   CHECK_FALSE(o.topic_mode);
   CHECK_NOTHROW(o.Validate());
 
