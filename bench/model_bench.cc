@@ -22,6 +22,7 @@
 #include "model/model_profiling.h"
 #include "model/p2i_config.h"
 #include "model/p2i_synthesizer.h"
+#include "util/order_stats.h"
 
 using namespace p2i;
 
@@ -42,12 +43,7 @@ void SampleMatmulRate(int threads, int runs, std::vector<double>* samples) {
     samples->push_back(model::MeasureMatmulFlopRate(kMatmulSide, threads, /*reps=*/1));
 }
 
-double Median(std::vector<double> v) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  const size_t n = v.size();
-  return n % 2 == 1 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
+using util::Median;
 
 // Runs `timed` between two sets of matmul samples; returns the median rate around it.
 template <typename F>

@@ -37,10 +37,11 @@
 
 #include <nlohmann/json.hpp>
 
-#include "msgs/codec.h"
 #include "convert/pose.h"
+#include "msgs/codec.h"
 #include "nodes/runtime/service_client.h"
 #include "scene/trajectory.h"
+#include "util/order_stats.h"
 
 extern char** environ;
 
@@ -61,11 +62,8 @@ struct Row {
   double load1 = 0;                            // 1-minute load average at the end
 };
 
-double Percentile(std::vector<double> v, double p) {  // nearest rank, as the monitor
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  const size_t rank = static_cast<size_t>(std::ceil(p / 100.0 * v.size()));
-  return v[std::max<size_t>(rank, 1) - 1];
+double Percentile(const std::vector<double>& v, double p) {  // nearest rank, as the monitor
+  return v.empty() ? 0.0 : util::PercentileNearestRank(v, p);
 }
 
 double LoadAverage() {

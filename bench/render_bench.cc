@@ -33,14 +33,8 @@ double ThreadCpuMs() {
 
 p2i::scene::CameraInfo MakeCamera(int w, int h) {
   // 7-Scenes-like field of view (f = 585 at 640x480), scaled to the image width.
-  p2i::scene::CameraInfo c;
-  c.image_width = w;
-  c.image_height = h;
   const double f = 585.0 * w / 640.0;
-  c.camera_matrix = {f, 0, (w - 1) / 2.0, 0, f, (h - 1) / 2.0, 0, 0, 1};
-  c.projection_matrix = {f, 0, (w - 1) / 2.0, 0, 0, f, (h - 1) / 2.0, 0, 0, 0, 1, 0};
-  c.distortion_coefficients.assign(5, 0.0);
-  return c;
+  return p2i::scene::CameraInfo::Pinhole(w, h, f, f, (w - 1) / 2.0, (h - 1) / 2.0);
 }
 
 }  // namespace

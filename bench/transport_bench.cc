@@ -22,6 +22,7 @@
 #include "nodes/runtime/raw_publisher.h"
 #include "nodes/runtime/raw_service.h"
 #include "nodes/runtime/raw_subscriber.h"
+#include "util/order_stats.h"
 
 namespace {
 
@@ -38,11 +39,9 @@ struct Row {
   double mb_per_s = 0;
 };
 
-double Percentile(std::vector<double> v, double q) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  const size_t i = std::min(v.size() - 1, static_cast<size_t>(q * (v.size() - 1) + 0.5));
-  return v[i];
+/// q in [0, 1]; nearest rank (util/order_stats.h), 0 when there are no samples.
+double Percentile(const std::vector<double>& v, double q) {
+  return v.empty() ? 0.0 : util::PercentileNearestRank(v, q * 100.0);
 }
 
 msgs::RgbdFrame MakeFrame(int w, int h) {

@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "scene/capture.h"
+#include "util/json_number.h"
 
 namespace p2i::eval {
 namespace {
@@ -31,7 +32,7 @@ std::string CsvField(const std::string& s) {
   return out + "\"";
 }
 
-json J(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
+json J(double v) { return util::NumberOrNull(v); }
 double D(const json& j, const char* key) {
   if (!j.contains(key) || j.at(key).is_null()) return std::nan("");
   return j.at(key).get<double>();

@@ -13,6 +13,8 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "util/order_stats.h"
+
 namespace p2i::model {
 namespace {
 
@@ -162,12 +164,7 @@ double LatencyRecorder::PercentileMs(double p) const {
   if (!(p >= 0.0 && p <= 100.0)) {
     throw std::invalid_argument("LatencyRecorder::PercentileMs: p must be in [0, 100]");
   }
-  std::vector<double> sorted = samples_s_;
-  std::sort(sorted.begin(), sorted.end());
-  const double n = static_cast<double>(sorted.size());
-  int64_t rank = static_cast<int64_t>(std::ceil(p / 100.0 * n)) - 1;
-  rank = std::clamp<int64_t>(rank, 0, static_cast<int64_t>(sorted.size()) - 1);
-  return sorted[static_cast<size_t>(rank)] * 1e3;
+  return util::PercentileNearestRank(samples_s_, p) * 1e3;
 }
 
 LatencySummary LatencyRecorder::Summary() const {

@@ -126,8 +126,7 @@ void WriteUntrainedCheckpoint(const P2iConfig& config, const std::string& path) 
   meta.config = config;
   meta.phase2_step = nets.e ? 1 : 0;
   const double f = config.resolution * 0.9, c = (config.resolution - 1) / 2.0;
-  meta.camera.image_width = meta.camera.image_height = config.resolution;
-  meta.camera.camera_matrix = {f, 0, c, 0, f, c, 0, 0, 1};
+  meta.camera = scene::CameraInfo::Pinhole(config.resolution, config.resolution, f, f, c, c);
   SaveCheckpoint(path, meta, nets, {});
 }
 

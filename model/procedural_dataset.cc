@@ -38,13 +38,7 @@ cv::Vec3b WallColour(int wall, const Eigen::Vector3d& p) {
 scene::RgbdDataset MakeProceduralDataset(int num_frames, int size, uint64_t seed) {
   scene::RgbdDataset data;
   const double f = size * 0.8, c = (size - 1) / 2.0;
-  auto& cam = data.camera;
-  cam.camera_name = "procedural";
-  cam.image_width = size;
-  cam.image_height = size;
-  cam.camera_matrix = {f, 0, c, 0, f, c, 0, 0, 1};
-  cam.projection_matrix = {f, 0, c, 0, 0, f, c, 0, 0, 0, 1, 0};
-  cam.distortion_coefficients.assign(5, 0.0);
+  data.camera = scene::CameraInfo::Pinhole(size, size, f, f, c, c, "procedural");
   const Eigen::Vector3d lo(-2, -2, 0), hi(2, 2, 3);
   for (int i = 0; i < num_frames; ++i) {
     const double s = static_cast<double>(i) / std::max(1, num_frames) + 0.13 * seed;

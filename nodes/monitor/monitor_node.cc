@@ -16,25 +16,18 @@
 #include "convert/pose.h"
 #include "model/metrics.h"
 #include "scene/image_ops.h"
+#include "util/json_number.h"
+#include "util/order_stats.h"
 
 namespace p2i::nodes {
 namespace {
 
-double Median(std::vector<double> v) {
-  if (v.empty()) return std::nan("");
-  std::sort(v.begin(), v.end());
-  return v[v.size() / 2];
+using util::Median;
+using util::NumberOrNull;
+/// Nearest rank, as model::LatencyRecorder.
+double Percentile(const std::vector<double>& v, double p) {
+  return util::PercentileNearestRank(v, p);
 }
-
-/// Nearest-rank percentile, as model::LatencyRecorder.
-double Percentile(std::vector<double> v, double p) {
-  if (v.empty()) return std::nan("");
-  std::sort(v.begin(), v.end());
-  const size_t rank = static_cast<size_t>(std::ceil(p / 100.0 * v.size()));
-  return v[std::max<size_t>(rank, 1) - 1];
-}
-
-nlohmann::json NumberOrNull(double x) { return std::isfinite(x) ? nlohmann::json(x) : nullptr; }
 
 }  // namespace
 

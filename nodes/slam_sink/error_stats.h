@@ -16,10 +16,9 @@ struct ErrorSummary {
   double p90 = std::numeric_limits<double>::quiet_NaN();
   double max = std::numeric_limits<double>::quiet_NaN();
 
-  /// Percentiles by linear interpolation between order statistics (numpy's default).
+  /// Of the finite values; median and p90 by linear interpolation between order statistics
+  /// (numpy's default, util::PercentileLinear).
   static ErrorSummary Of(std::vector<double> values);
-  /// The q-quantile (q in [0, 1]) of sorted values; NaN when empty.
-  static double Quantile(const std::vector<double>& sorted, double q);
 };
 
 }  // namespace p2i::slam_sink

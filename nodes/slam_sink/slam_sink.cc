@@ -9,12 +9,12 @@
 #include <stdexcept>
 #include <utility>
 
+#include "util/json_number.h"
+
 namespace p2i::slam_sink {
 namespace {
 
-nlohmann::json NumberOrNull(double v) {
-  return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr);
-}
+using util::NumberOrNull;
 
 nlohmann::json ToJson(const ErrorSummary& s) {
   return {{"count", s.count},

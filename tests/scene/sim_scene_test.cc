@@ -23,15 +23,8 @@ using p2i::scene::SimTexture;
 
 namespace {
 
-// CameraInfo's fields directly (its helpers live in camera_info.cc, another engineer's file).
 CameraInfo MakeCamera(int w, int h, double f, double cx, double cy) {
-  CameraInfo c;
-  c.image_width = w;
-  c.image_height = h;
-  c.camera_matrix = {f, 0, cx, 0, f, cy, 0, 0, 1};
-  c.projection_matrix = {f, 0, cx, 0, 0, f, cy, 0, 0, 0, 1, 0};
-  c.distortion_coefficients.assign(5, 0.0);
-  return c;
+  return CameraInfo::Pinhole(w, h, f, f, cx, cy);
 }
 
 bool SamePixels(const RgbdSample& a, const RgbdSample& b) {

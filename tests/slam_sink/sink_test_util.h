@@ -41,15 +41,9 @@ class TempDir {
 };
 
 inline scene::CameraInfo SmallCamera(int width = 160, int height = 120) {
-  scene::CameraInfo camera;
-  camera.camera_name = "sim";
-  camera.image_width = width;
-  camera.image_height = height;
   const double f = 0.75 * width;
-  camera.camera_matrix = {f, 0, (width - 1) / 2.0, 0, f, (height - 1) / 2.0, 0, 0, 1};
-  camera.projection_matrix = {f, 0, (width - 1) / 2.0, 0, 0, f, (height - 1) / 2.0, 0, 0, 0, 1, 0};
-  camera.distortion_coefficients = {0, 0, 0, 0, 0};
-  return camera;
+  return scene::CameraInfo::Pinhole(width, height, f, f, (width - 1) / 2.0, (height - 1) / 2.0,
+                                    "sim");
 }
 
 inline const scene::SimScene& Office() {
