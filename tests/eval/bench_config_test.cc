@@ -76,7 +76,7 @@ methods:
   - {name: w, type: warp, k: 2, fill_holes: false, z_tolerance: 0.1}
   - {name: net, type: p2i_net, steps: 2}
   - {name: base, type: cnn_baseline}
-sizes: [32]
+sizes: [128]  # the default preset (g_widths) is for 128
 )",
                                                     "my_bench.yaml");
   REQUIRE(c.methods.size() == 3);
