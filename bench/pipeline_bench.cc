@@ -37,13 +37,11 @@
 
 #include <nlohmann/json.hpp>
 
+#include "bench/bench_process.h"
 #include "convert/pose.h"
 #include "msgs/codec.h"
 #include "nodes/runtime/service_client.h"
 #include "scene/trajectory.h"
-#include "util/order_stats.h"
-
-extern char** environ;
 
 namespace {
 
@@ -62,52 +60,9 @@ struct Row {
   double load1 = 0;                            // 1-minute load average at the end
 };
 
-double Percentile(const std::vector<double>& v, double p) {  // nearest rank, as the monitor
-  return v.empty() ? 0.0 : util::PercentileNearestRank(v, p);
-}
-
-double LoadAverage() {
-  std::ifstream in("/proc/loadavg");
-  double l = 0;
-  in >> l;
-  return l;
-}
-
-/// A child process with its own environment additions; SIGTERM + wait on Stop().
-class Child {
- public:
-  Child(std::vector<std::string> argv, const std::string& run_dir, const std::string& log) {
-    std::vector<std::string> env_store;
-    for (char** e = environ; *e != nullptr; ++e)
-      if (std::strncmp(*e, "P2I_RUN_DIR=", 12) != 0) env_store.emplace_back(*e);
-    env_store.push_back("P2I_RUN_DIR=" + run_dir);
-    std::vector<char*> env, args;
-    for (auto& e : env_store) env.push_back(e.data());
-    env.push_back(nullptr);
-    for (auto& a : argv) args.push_back(a.data());
-    args.push_back(nullptr);
-    posix_spawn_file_actions_t fa;
-    posix_spawn_file_actions_init(&fa);
-    posix_spawn_file_actions_addopen(&fa, 1, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    posix_spawn_file_actions_adddup2(&fa, 1, 2);
-    if (posix_spawn(&pid_, args[0], &fa, nullptr, args.data(), env.data()) != 0) pid_ = -1;
-    posix_spawn_file_actions_destroy(&fa);
-    if (pid_ < 0) throw std::runtime_error("cannot start " + argv[0]);
-  }
-  ~Child() { Stop(); }
-  int Stop() {
-    if (pid_ <= 0) return 0;
-    ::kill(pid_, SIGTERM);
-    int status = 0;
-    ::waitpid(pid_, &status, 0);
-    pid_ = -1;
-    return WIFEXITED(status) ? WEXITSTATUS(status) : -WTERMSIG(status);
-  }
-  bool Running() const { return pid_ > 0 && ::waitpid(pid_, nullptr, WNOHANG) == 0; }
-
- private:
-  pid_t pid_ = -1;
-};
+using bench::Child;
+using bench::LoadAverage;
+using bench::Percentile;
 
 int Run(const std::string& cmd) {
   const int rc = std::system(cmd.c_str());

@@ -6,9 +6,7 @@
 ///                   [--method nearest] [--checkpoint FILE]
 /// Each configuration runs in its own P2I_RUN_DIR; processes are the real executables in the
 /// folder of this program.
-#include <fcntl.h>
 #include <signal.h>
-#include <spawn.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -21,6 +19,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <mutex>
 #include <sstream>
 #include <string>
@@ -29,11 +28,10 @@
 
 #include <nlohmann/json.hpp>
 
+#include "bench/bench_process.h"
 #include "convert/pose.h"
 #include "nodes/runtime/service_client.h"
 #include "scene/trajectory.h"
-
-extern char** environ;
 
 namespace {
 
@@ -41,39 +39,8 @@ using namespace p2i;
 using Clock = std::chrono::steady_clock;
 namespace fs = std::filesystem;
 
-pid_t Spawn(std::vector<std::string> argv, const std::string& run_dir, const std::string& log) {
-  std::vector<std::string> env_store;
-  for (char** e = environ; *e != nullptr; ++e)
-    if (std::strncmp(*e, "P2I_RUN_DIR=", 12) != 0) env_store.emplace_back(*e);
-  env_store.push_back("P2I_RUN_DIR=" + run_dir);
-  std::vector<char*> env, args;
-  for (auto& e : env_store) env.push_back(e.data());
-  env.push_back(nullptr);
-  for (auto& a : argv) args.push_back(a.data());
-  args.push_back(nullptr);
-  posix_spawn_file_actions_t fa;
-  posix_spawn_file_actions_init(&fa);
-  posix_spawn_file_actions_addopen(&fa, 1, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  posix_spawn_file_actions_adddup2(&fa, 1, 2);
-  pid_t pid = -1;
-  if (posix_spawn(&pid, args[0], &fa, nullptr, args.data(), env.data()) != 0) pid = -1;
-  posix_spawn_file_actions_destroy(&fa);
-  if (pid < 0) throw std::runtime_error("cannot start " + argv[0]);
-  return pid;
-}
-
-void StopAll(std::vector<pid_t>* pids) {
-  for (pid_t p : *pids) ::kill(p, SIGTERM);
-  for (pid_t p : *pids) ::waitpid(p, nullptr, 0);
-  pids->clear();
-}
-
-double LoadAverage() {
-  std::ifstream in("/proc/loadavg");
-  double l = 0;
-  in >> l;
-  return l;
-}
+using bench::Child;
+using bench::LoadAverage;
 
 std::vector<int> ParseInts(const std::string& s) {
   std::vector<int> out;
@@ -117,8 +84,9 @@ int main(int argc, char** argv) {
   for (int k : workers) {
     char tmpl[] = "/tmp/p2i-pool-bench-XXXXXX";
     const std::string run = ::mkdtemp(tmpl);
-    std::vector<pid_t> pids;
-    pids.push_back(Spawn({bin + "/p2i_pool", "status_period:=0"}, run, run + "/pool.log"));
+    std::vector<std::unique_ptr<Child>> pids;  // stopped (SIGTERM + wait) on clear()
+    pids.push_back(std::make_unique<Child>(std::vector<std::string>{bin + "/p2i_pool", "status_period:=0"},
+                                           run, run + "/pool.log"));
     for (int w = 0; w < k; ++w) {
       std::vector<std::string> a = {bin + "/p2i_synthesizer", "--namespace",
                                     "/w" + std::to_string(w), "-r", "render:=/render",
@@ -127,7 +95,7 @@ int main(int argc, char** argv) {
                                     "height:=" + std::to_string(size), "threads:=1",
                                     "pool:={render: ''}"};
       if (!checkpoint.empty()) a.push_back("checkpoint:=" + checkpoint);
-      pids.push_back(Spawn(a, run, run + "/synth" + std::to_string(w) + ".log"));
+      pids.push_back(std::make_unique<Child>(a, run, run + "/synth" + std::to_string(w) + ".log"));
     }
     ::setenv("P2I_RUN_DIR", run.c_str(), 1);
     runtime::ServiceClientOptions o;
@@ -142,7 +110,7 @@ int main(int argc, char** argv) {
         std::string error;
         if (!c.Call(r, &rep, &error)) {
           std::fprintf(stderr, "warm-up failed: %s (logs in %s)\n", error.c_str(), run.c_str());
-          StopAll(&pids);
+          pids.clear();
           return 1;
         }
       }
@@ -189,7 +157,7 @@ int main(int argc, char** argv) {
     rows.push_back({{"workers", k}, {"clients", clients}, {"size", size}, {"method", method},
                     {"views", latencies.size()}, {"failed", failed.load()}, {"views_per_s", vps},
                     {"p50_ms", pct(0.5)}, {"p99_ms", pct(0.99)}, {"load1", load}});
-    StopAll(&pids);
+    pids.clear();
     fs::remove_all(run);
   }
   if (!out.empty()) std::ofstream(out) << rows.dump(2) << "\n";

@@ -6,7 +6,8 @@ generates from msgs/p2i.proto into build/python/ (protoc --python_out). Speaks t
 of docs/MESSAGES.md and docs/RUNTIME.md: topics are PUB/SUB multipart messages
 [topic '\\0'][header frame][blobs...]; the synthesizer's `render` service is ROUTER/DEALER with
 [''][u64 request id][header frame] requests and [''][id][status][header][blobs...] replies.
-Endpoints come from the discovery registry in $P2I_RUN_DIR (default /tmp/p2i-$UID).
+Endpoints come from the discovery registries of run_dirs(): $P2I_RUN_DIR when set, else
+/tmp/p2i-$UID and every running `p2i launch` (/tmp/p2i-$UID/launch-*), like `p2i topic list`.
 
     /usr/bin/python3 python/p2i_client.py render --pose 0.5 0 1.2 0 0 0 1 --out views/
     /usr/bin/python3 python/p2i_client.py subscribe /rgbd --count 5 --out frames/
@@ -42,6 +43,18 @@ def run_dir():
     return os.environ.get("P2I_RUN_DIR") or "/tmp/p2i-%d" % os.getuid()
 
 
+def run_dirs():
+    """Run dirs whose registries discovery reads: the rule of runtime::DiscoveryRunDirs
+    (nodes/runtime/graph_discovery.h), as `p2i topic list`, `p2i record -a` and the Foxglove
+    bridge apply it: $P2I_RUN_DIR when set, else /tmp/p2i-$UID and every running launch's
+    /tmp/p2i-$UID/launch-* (with a registry), so nothing needs exporting."""
+    if os.environ.get("P2I_RUN_DIR"):
+        return [run_dir()]
+    base = run_dir()
+    return [base] + sorted(d for d in glob.glob(os.path.join(base, "launch-*"))
+                           if os.path.isdir(os.path.join(d, "registry")))
+
+
 def _flatten(name):
     s = name.lstrip("/").replace("/", ".")
     return s or "root"
@@ -50,7 +63,10 @@ def _flatten(name):
 def endpoints(kind, name):
     """Endpoints of live publishers / servers of `name` from the registry, else the default."""
     found = []
-    for path in glob.glob(os.path.join(run_dir(), "registry", "*.%s.%s" % (kind, _flatten(name)))):
+    paths = []
+    for d in run_dirs():
+        paths += sorted(glob.glob(os.path.join(d, "registry", "*.%s.%s" % (kind, _flatten(name)))))
+    for path in paths:
         entry = {}
         try:
             with open(path) as f:

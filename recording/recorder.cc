@@ -11,6 +11,8 @@
 
 #include "msgs/codec.h"
 #include "nodes/runtime/endpoints.h"
+#include "nodes/runtime/graph_discovery.h"
+#include "nodes/runtime/peer_registry.h"
 #include "nodes/runtime/publisher.h"
 #include "nodes/runtime/wire_io.h"
 #include "recording/foxglove_convert.h"
@@ -81,9 +83,14 @@ void Recorder::Discover() {
   if (now < next_discovery_) return;
   next_discovery_ = now + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
                               std::chrono::duration<double>(options_.discovery_period_s));
+  // The graph as `p2i topic list` sees it: $P2I_RUN_DIR, else every running launch of this
+  // user, plus the peers of $P2I_PEERS.
+  const auto graph = runtime::DiscoverGraph(runtime::PeerRegistries(), std::chrono::milliseconds(500));
   std::map<std::string, std::vector<std::string>> found;
-  for (const auto& e : runtime::Registry::List()) {
-    if (e.kind == "topic") found[e.name].push_back(e.endpoint);
+  for (const auto& e : graph) {
+    if (e.kind != "topic" || found.count(e.name)) continue;
+    auto endpoints = runtime::ReachableEndpoints(graph, "topic", e.name);
+    if (!endpoints.empty()) found[e.name] = std::move(endpoints);
   }
   for (const auto& [name, endpoints] : found) {
     auto it = topics_.find(name);

@@ -18,6 +18,7 @@
 
 #include "msgs/codec.h"
 #include "nodes/runtime/endpoints.h"
+#include "nodes/runtime/graph_discovery.h"
 #include "nodes/runtime/peer_registry.h"
 #include "nodes/runtime/publisher.h"
 #include "nodes/runtime/rate_window.h"
@@ -40,11 +41,8 @@ std::string Absolute(const std::string& topic) {
 struct Graph {
   std::vector<std::string> peers;
   std::vector<RegistryEntry> Entries() const {
-    const char* env = std::getenv("P2I_RUN_DIR");
-    const std::vector<std::string> dirs =
-        env && *env ? std::vector<std::string>{runtime::RunDir()} : Registry::UserRunDirs();
     std::vector<std::string> errors;
-    auto entries = runtime::ListGraph(dirs, peers, std::chrono::milliseconds(1000), &errors);
+    auto entries = runtime::DiscoverGraph(peers, std::chrono::milliseconds(1000), &errors);
     for (const auto& e : errors) std::fprintf(stderr, "p2i topic: warning: %s\n", e.c_str());
     return entries;
   }

@@ -7,6 +7,8 @@
 #include <stdexcept>
 
 #include "nodes/runtime/endpoints.h"
+#include "nodes/runtime/graph_discovery.h"
+#include "nodes/runtime/peer_registry.h"
 #include "nodes/runtime/publisher.h"
 #include "recording/foxglove_convert.h"
 #include "recording/inline_blobs.h"
@@ -88,8 +90,9 @@ void BridgeNode::PublishStats() {
 
 void BridgeNode::Discover() {
   std::map<std::string, std::string> found;  // topic -> type
-  for (const auto& e : runtime::Registry::List()) {
-    if (e.kind != "topic") continue;
+  graph_ = runtime::DiscoverGraph(runtime::PeerRegistries(), std::chrono::milliseconds(500));
+  for (const auto& e : graph_) {
+    if (e.kind != "topic" || runtime::ReachableEndpoints(graph_, "topic", e.name).empty()) continue;
     if (!options_.topics.empty() &&
         std::find(options_.topics.begin(), options_.topics.end(), e.name) == options_.topics.end())
       continue;
@@ -140,9 +143,7 @@ void BridgeNode::EnsureSubscribed(uint32_t channel) {
   if (c == channel_topic_.end()) return;
   const std::string topic = c->second;
   if (subscribed_.count(topic)) return;  // kept across unadvertise / re-advertise
-  std::vector<std::string> endpoints;
-  for (const auto& e : runtime::Registry::List())
-    if (e.kind == "topic" && e.name == topic) endpoints.push_back(e.endpoint);
+  const std::vector<std::string> endpoints = runtime::ReachableEndpoints(graph_, "topic", topic);
   runtime::SubscriberOptions o;
   o.endpoints = endpoints;
   subscribed_[topic] = SubscribeRaw(topic,

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "nodes/foxglove_bridge/ws_server.h"
+#include "nodes/runtime/endpoints.h"
 #include "nodes/runtime/node.h"
 
 namespace p2i::foxglove_bridge {
@@ -50,6 +51,7 @@ class BridgeNode : public runtime::Node {
   BridgeOptions options_;
   std::unique_ptr<WsServer> server_;
   std::map<std::string, TopicState> topics_;      // executor thread only
+  std::vector<runtime::RegistryEntry> graph_;     // last discovery (executor only)
   std::map<uint32_t, std::string> channel_topic_; // channel -> source topic (executor only)
   /// Topic subscriptions made for clients (executor only). The node owns them until it closes.
   std::map<std::string, std::shared_ptr<runtime::RawSubscriber>> subscribed_;

@@ -2,6 +2,9 @@
 /// @brief Signal handling through a self-pipe so zmq_poll wakes immediately.
 #include "nodes/runtime/shutdown.h"
 
+#include <algorithm>
+#include <cstdint>
+
 #include <fcntl.h>
 #include <poll.h>
 #include <signal.h>
@@ -64,8 +67,10 @@ int Shutdown::WakeFd() {
 bool Shutdown::WaitFor(std::chrono::nanoseconds d) {
   if (Requested()) return true;
   pollfd p{WakeFd(), POLLIN, 0};
-  const auto ms = std::chrono::duration_cast<std::chrono::milliseconds>(d).count();
-  poll(&p, 1, static_cast<int>(ms));
+  // A negative timeout would make poll() wait forever (a deadline already past when the
+  // caller computed what is left of it): clamp to 0.
+  const auto ms = std::max<int64_t>(0, std::chrono::duration_cast<std::chrono::milliseconds>(d).count());
+  poll(&p, 1, static_cast<int>(std::min<int64_t>(ms, INT32_MAX)));
   return Requested();
 }
 

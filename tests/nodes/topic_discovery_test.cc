@@ -18,44 +18,15 @@
 
 namespace {
 
-/// `p2i launch ARGS...` as a child with stdout+stderr in `log`; P2I_RUN_DIR as given ("" =
-/// unset, the launcher then makes /tmp/p2i-$UID/launch-<pid>).
 pid_t StartLaunch(const std::vector<std::string>& args, const std::string& run_dir,
                   const std::string& log) {
-  const pid_t pid = fork();
-  if (pid == 0) {
-    if (run_dir.empty()) unsetenv("P2I_RUN_DIR"); else setenv("P2I_RUN_DIR", run_dir.c_str(), 1);
-    unsetenv("P2I_CURVE_DIR");
-    unsetenv("P2I_PEERS");
-    freopen(log.c_str(), "w", stdout);
-    dup2(fileno(stdout), 2);
-    const std::string exe = p2i::testing::BinDir() + "/p2i";
-    std::vector<char*> argv = {const_cast<char*>(exe.c_str()), const_cast<char*>("launch")};
-    for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-    argv.push_back(nullptr);
-    execv(exe.c_str(), argv.data());
-    _exit(127);
-  }
-  return pid;
+  return p2i::testing::StartLaunch(p2i::testing::BinDir(), args, run_dir, log);
 }
 
-int Stop(pid_t pid) {
-  kill(pid, SIGINT);
-  int status = 0;
-  waitpid(pid, &status, 0);
-  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-}
+int Stop(pid_t pid) { return p2i::testing::StopLaunch(pid); }
 
 std::string Until(const std::string& command, const std::string& needle, int seconds = 20) {
-  std::string out;
-  int code = 0;
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(seconds);
-  while (std::chrono::steady_clock::now() < deadline) {
-    out = p2i::testing::RunCommand(command, &code);
-    if (out.find(needle) != std::string::npos) break;
-    std::this_thread::sleep_for(std::chrono::milliseconds(200));
-  }
-  return out;
+  return p2i::testing::RunCommandUntil(command, needle, seconds);
 }
 
 }  // namespace

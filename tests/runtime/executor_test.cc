@@ -52,3 +52,12 @@ TEST_CASE("Executor: a cancelled timer no longer runs", "[unit]") {
   CHECK(a == 10);
   CHECK(b <= 1);
 }
+
+TEST_CASE("Shutdown::WaitFor returns at once for a deadline already past", "[unit]") {
+  // A negative timeout used to reach poll() as is, which then waited forever (p2i play hung
+  // when it was descheduled past a message's due time).
+  p2i::runtime::Shutdown::ResetForTesting();
+  CHECK_FALSE(p2i::runtime::Shutdown::WaitFor(std::chrono::milliseconds(-5)));
+  CHECK_FALSE(p2i::runtime::Shutdown::WaitFor(std::chrono::nanoseconds(-1)));
+  CHECK_FALSE(p2i::runtime::Shutdown::WaitFor(std::chrono::milliseconds(1)));
+}
