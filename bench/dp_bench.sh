@@ -23,14 +23,16 @@ for W in 1 2; do
   done
   for p in "${PIDS[@]}"; do wait "$p"; done
   RATE=$(tr '\r' '\n' < "$WORK/w$W.r0.log" | grep -o '[0-9.]* it/s' | tail -1 | cut -d' ' -f1)
-  MS=0; BYTES=0
+  MS=0; P50=0; SIZES="[]"; PER_STEP=0; CALLS=0
   if [ -f "$WORK/w$W/distributed.rank0.json" ]; then
-    MS=$(/usr/bin/python3 -c "import json;print(json.load(open('$WORK/w$W/distributed.rank0.json'))['allreduce_ms_mean'])")
-    BYTES=$(/usr/bin/python3 -c "import json;print(json.load(open('$WORK/w$W/distributed.rank0.json'))['bytes_per_allreduce'])")
+    read -r MS P50 SIZES PER_STEP CALLS < <(/usr/bin/python3 -c "
+import json; j = json.load(open('$WORK/w$W/distributed.rank0.json'))
+print(j['allreduce_ms_mean'], j['allreduce_ms_p50'], json.dumps(j.get('allreduce_sizes_bytes', [j['bytes_per_allreduce']])).replace(' ', ''),
+      j.get('allreduce_bytes_total', 0) // $STEPS, j['allreduce_calls'])")
   fi
   LOAD=$(cut -d' ' -f1 /proc/loadavg)
-  echo "world_size $W: $RATE steps/s (each rank's batch from $CONFIG), all-reduce mean $MS ms of $BYTES bytes, load $LOAD"
-  rows+=("{\"world_size\": $W, \"steps_per_s\": ${RATE:-0}, \"allreduce_ms_mean\": $MS, \"bytes_per_allreduce\": $BYTES, \"load1\": $LOAD}")
+  echo "world_size $W: $RATE steps/s (each rank's batch from $CONFIG), $CALLS all-reduces (sizes $SIZES bytes) mean $MS ms p50 $P50 ms, $PER_STEP bytes per step, load $LOAD"
+  rows+=("{\"world_size\": $W, \"steps_per_s\": ${RATE:-0}, \"allreduce_calls\": $CALLS, \"allreduce_ms_mean\": $MS, \"allreduce_ms_p50\": $P50, \"allreduce_sizes_bytes\": $SIZES, \"bytes_per_step\": $PER_STEP, \"load1\": $LOAD}")
   PORT=$((PORT + 1))
 done
 if [ -n "$OUT" ]; then (IFS=,; echo "[${rows[*]}]") > "$OUT"; fi

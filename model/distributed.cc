@@ -212,7 +212,16 @@ void DataParallel::WriteStats(const std::string& dir) const {
   std::sort(ms.begin(), ms.end());
   double sum = 0;
   for (double m : ms) sum += m;
+  // The distinct all-reduce sizes (one per optimiser: G, D, ENET) and the total, so the bytes
+  // per training step are total / steps (bench/dp_bench.sh).
+  std::vector<int64_t> sizes = allreduce_bytes_;
+  std::sort(sizes.begin(), sizes.end());
+  sizes.erase(std::unique(sizes.begin(), sizes.end()), sizes.end());
+  int64_t total = 0;
+  for (int64_t b : allreduce_bytes_) total += b;
   nlohmann::json j{{"rank", options_.rank},
+                   {"allreduce_bytes_total", total},
+                   {"allreduce_sizes_bytes", sizes},
                    {"world_size", options_.world_size},
                    {"allreduce_calls", ms.size()},
                    {"bytes_per_allreduce", last_bytes_},

@@ -10,6 +10,7 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <functional>
 #include <string>
@@ -66,6 +67,9 @@ class RawWs {
   bool ReadFrame(uint8_t* opcode, std::string* payload, int timeout_ms = 3000) {
     uint8_t h[2];
     if (!ReadN(h, 2, timeout_ms)) return false;
+    // Once a frame has begun, give its rest time: giving up mid-frame would leave the stream
+    // out of step (the next "header" read from the middle of a payload).
+    timeout_ms = std::max(timeout_ms, 10000);
     *opcode = h[0] & 0x0f;
     uint64_t n = h[1] & 0x7f;
     if (n == 126) {
