@@ -4,6 +4,10 @@
 # [unit], [integration] or [slow]; each becomes the ctest label of the same name, so
 # `ctest -L unit` is the quick subset. A test case with none of the three runs as `unit`
 # (never silently skipped).
+#
+# A test case that cannot run here (no ../shared data or LPIPS weights, no camera tool) calls
+# P2I_SKIP (tests/skip.h), which prints "SKIPPED: <why>": SKIP_REGULAR_EXPRESSION makes ctest
+# report it as skipped, not passed.
 function(p2i_add_catch_tests target)
   cmake_parse_arguments(ARG "" "" "SOURCES;LIBS" ${ARGN})
   add_executable(${target} ${ARG_SOURCES})
@@ -12,7 +16,8 @@ function(p2i_add_catch_tests target)
     P2I_SOURCE_DIR="${PROJECT_SOURCE_DIR}"
     P2I_BINARY_DIR="${PROJECT_BINARY_DIR}"
     P2I_SHARED_DIR_DEFAULT="${P2I_SHARED_DIR_DEFAULT}")
-  set(props ENVIRONMENT "P2I_BIN_DIR=${PROJECT_BINARY_DIR}/bin")
+  set(props ENVIRONMENT "P2I_BIN_DIR=${PROJECT_BINARY_DIR}/bin"
+            SKIP_REGULAR_EXPRESSION "SKIPPED:")
   catch_discover_tests(${target} TEST_SPEC "[unit]"
     PROPERTIES LABELS unit TIMEOUT 300 ${props})
   catch_discover_tests(${target} TEST_SPEC "[integration]"

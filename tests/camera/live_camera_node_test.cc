@@ -13,15 +13,17 @@
 
 #include <catch2/catch.hpp>
 
-#include "msgs/codec.h"
 #include "convert/image.h"
 #include "convert/pose.h"
+#include "msgs/codec.h"
+#include "nodes/camera/live_backend.h"
 #include "nodes/runtime/publisher.h"
 #include "nodes/runtime/raw_publisher.h"
 #include "nodes/runtime/raw_subscriber.h"
 #include "scene/trajectory.h"
 #include "tests/process_util.h"
 #include "tests/runtime/test_util.h"
+#include "tests/skip.h"
 #include "tests/test_paths.h"
 
 namespace p2i::nodes {
@@ -75,14 +77,13 @@ std::map<std::string, uint64_t> WaitCounter(runtime::RawSubscriber* status, cons
 TEST_CASE("aravis backend over GigE Vision (arv-fake-gv-camera on 127.0.0.1): frames carry "
           "poses matched by stamp, frames without poses are dropped and counted",
           "[integration]") {
+  if (!HaveAravis()) P2I_SKIP("p2i_camera was built without Aravis (libaravis-dev)");
   if (access(kFakeGv, X_OK) != 0) {
-    WARN("SKIPPED: " << kFakeGv << " not installed (Debian package aravis-tools)");
-    return;
+    P2I_SKIP(kFakeGv << " not installed (Debian package aravis-tools)");
   }
   if (GvcpListening()) {
-    WARN("SKIPPED: UDP 127.0.0.1:3956 (GVCP) is already in use, another GigE Vision (fake) "
-         "camera runs here; only one can listen on the port");
-    return;
+    P2I_SKIP("UDP 127.0.0.1:3956 (GVCP) is already in use, another GigE Vision (fake) "
+             "camera runs here; only one can listen on the port");
   }
   ScopedRunDir run_dir;
   Process fake({kFakeGv, "-i", "127.0.0.1", "-s", "P2ITEST"});
@@ -173,6 +174,7 @@ TEST_CASE("aravis backend over GigE Vision (arv-fake-gv-camera on 127.0.0.1): fr
 
 TEST_CASE("aravis (in-process fake) + p2i_pose_source: every frame's pose lies on the published "
           "trajectory, between two consecutive poses", "[integration]") {
+  if (!HaveAravis()) P2I_SKIP("p2i_camera was built without Aravis (libaravis-dev)");
   ScopedRunDir run_dir;
   runtime::RawSubscriber rgbd("/rgbd", {});
   Process camera({Bin("p2i_camera"), "backend:=aravis", "device:=Fake_1", "pixel_format:=Mono8",
@@ -221,6 +223,7 @@ TEST_CASE("aravis (in-process fake) + p2i_pose_source: every frame's pose lies o
 }
 
 TEST_CASE("aravis backend: a missing device is a start-up error naming it", "[integration]") {
+  if (!HaveAravis()) P2I_SKIP("p2i_camera was built without Aravis (libaravis-dev)");
   ScopedRunDir run_dir;
   int code = 0;
   const std::string out = RunCommand(

@@ -10,6 +10,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "model/lpips.h"
+#include "tests/skip.h"
 #include "tests/test_paths.h"
 
 using namespace p2i::model;
@@ -32,10 +33,7 @@ TEST_CASE("LpipsSqueeze reproduces the upstream reference values", "[unit]") {
   const std::string weights = LpipsDir() + "/lpips_squeeze_v0.1.pth";
   std::string why;
   auto metric = LpipsSqueeze::TryLoad(weights, &why);
-  if (!metric) {
-    WARN("SKIPPED: " << why);
-    return;
-  }
+  if (!metric) P2I_SKIP(why);
   const cv::Mat ref = LoadRgb("ex_ref.png");
   const cv::Mat p0 = LoadRgb("ex_p0.png");
   const cv::Mat p1 = LoadRgb("ex_p1.png");

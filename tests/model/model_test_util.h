@@ -1,11 +1,9 @@
 /// @file model_test_util.h
 /// @brief Helpers shared by the model tests: Catch's CHECK restored after LibTorch's glog, temp
-/// dirs, a tiny config, quiet trainer options, and exact comparison of module weights.
+/// dirs and the tiny config (tests/temp_dir.h, tests/tiny_config.h), quiet trainer options, and
+/// exact comparison of module weights.
 #pragma once
 
-#include <unistd.h>
-
-#include <filesystem>
 #include <string>
 
 #include <catch2/catch.hpp>
@@ -20,39 +18,17 @@
 
 #include "model/p2i_config.h"
 #include "model/trainer.h"
+#include "tests/temp_dir.h"
+#include "tests/tiny_config.h"
 
 namespace p2i::model::testing {
 
-/// An empty folder under the temp dir, unique per test process.
+/// p2i::testing::FreshDir under the model tests' prefix (kept after the test for inspection).
 inline std::string TempDir(const std::string& name) {
-  const auto dir = std::filesystem::temp_directory_path() /
-                   ("p2i_model_test_" + name + "_" + std::to_string(::getpid()));
-  std::filesystem::remove_all(dir);
-  std::filesystem::create_directories(dir);
-  return dir.string();
+  return p2i::testing::FreshDir("model_test_" + name);
 }
 
-/// A model small enough to train a few steps in about a second at 32x32.
-inline P2iConfig TinyConfig(const std::string& model = "p2i_net") {
-  P2iConfig c;
-  c.name = model == "p2i_net" ? "tiny" : "tiny_" + model;
-  c.model = model;
-  c.resolution = 32;
-  c.g_schedule = "custom";
-  c.g_widths = {16, 16, 8, 8};
-  c.g_fc_width = 16;
-  c.d_base_width = 8;
-  c.d_max_width = 16;
-  c.latent_dim = 32;
-  c.mapping_width = 16;
-  c.enet_width = 8;
-  c.enet_blocks = 1;
-  c.batch_size = 4;
-  c.val_every = 5;
-  c.checkpoint_every = 3;
-  c.Validate();
-  return c;
-}
+using p2i::testing::TinyConfig;
 
 /// One thread, no progress bar, `steps` in `phase` (0 = both, 1, 2).
 inline TrainerOptions Quiet(const std::string& dir, int steps, int phase = 1,

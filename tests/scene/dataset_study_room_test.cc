@@ -9,6 +9,7 @@
 #include "scene/image_ops.h"
 #include "scene/seven_scenes.h"
 #include "scene/splits.h"
+#include "tests/skip.h"
 #include "tests/test_paths.h"
 
 namespace p2i::scene {
@@ -16,12 +17,12 @@ namespace {
 
 std::string StudyRoom() { return p2i::testing::SharedDir() + "/data/study-room"; }
 
-bool Available() {
-  if (std::filesystem::is_directory(StudyRoom())) return true;
-  WARN("SKIPPED: real data not found at " << StudyRoom()
-                                          << " (set P2I_SHARED_DIR to the shared folder)");
-  return false;
-}
+bool Available() { return std::filesystem::is_directory(StudyRoom()); }
+// Skips the test case (ctest: skipped) when the data is absent.
+#define SKIP_WITHOUT_DATA()                                                                 \
+  if (!Available())                                                                         \
+  P2I_SKIP("real data not found at " << StudyRoom() << " (set P2I_SHARED_DIR to the shared " \
+                                                       "folder)")
 
 DatasetIndex Open() {
   SevenScenesOptions o;
@@ -30,7 +31,7 @@ DatasetIndex Open() {
 }
 
 TEST_CASE("Study-room data: 2 x 50 frames with finite unit poses", "[unit]") {
-  if (!Available()) return;
+  SKIP_WITHOUT_DATA();
   const DatasetIndex index = Open();
   REQUIRE(index.Sequences() == std::vector<std::string>{"seq-01", "seq-02"});
   CHECK(index.SelectSequences({"seq-01"}).size() == 50);
@@ -55,7 +56,7 @@ TEST_CASE("Study-room data: 2 x 50 frames with finite unit poses", "[unit]") {
 }
 
 TEST_CASE("Study-room data: the two trajectories' centres are about 2.8 m apart", "[unit]") {
-  if (!Available()) return;
+  SKIP_WITHOUT_DATA();
   const DatasetIndex index = Open();
   Eigen::Vector3d centre[2] = {Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()};
   for (const FrameRef& f : index.frames()) {
@@ -67,7 +68,7 @@ TEST_CASE("Study-room data: the two trajectories' centres are about 2.8 m apart"
 }
 
 TEST_CASE("Study-room data: pixels, depth validity and a training-size crop", "[unit]") {
-  if (!Available()) return;
+  SKIP_WITHOUT_DATA();
   const DatasetIndex index = Open();
   double invalid = 0.0;
   const size_t picks[] = {0, 25, 49, 50, 99};

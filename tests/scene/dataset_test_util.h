@@ -1,5 +1,6 @@
 /// @file dataset_test_util.h
-/// @brief Helpers for the dataset tests: temporary folders and small synthetic frames.
+/// @brief Helpers for the dataset tests: small synthetic frames (temporary folders:
+/// tests/temp_dir.h).
 #pragma once
 
 #include <stdlib.h>
@@ -11,28 +12,9 @@
 
 #include "scene/pose.h"
 #include "scene/rgbd_sample.h"
+#include "tests/temp_dir.h"
 
 namespace p2i::testing {
-
-/// A fresh folder under $TMPDIR, removed with everything in it on destruction.
-class TempDir {
- public:
-  TempDir() {
-    std::string templ = (std::filesystem::temp_directory_path() / "p2i_data_XXXXXX").string();
-    path_ = mkdtemp(templ.data());
-  }
-  ~TempDir() {
-    std::error_code ec;
-    std::filesystem::remove_all(path_, ec);
-  }
-  TempDir(const TempDir&) = delete;
-  TempDir& operator=(const TempDir&) = delete;
-  const std::string& path() const { return path_; }
-  std::string operator/(const std::string& name) const { return path_ + "/" + name; }
-
- private:
-  std::string path_;
-};
 
 /// RGB with a different value per channel and per pixel (so a BGR/RGB swap or a transpose shows)
 /// and depth in whole millimetres with a few invalid (0) pixels.

@@ -15,30 +15,11 @@
 #include "scene/camera_info.h"
 #include "scene/sim_scene.h"
 #include "scene/trajectory.h"
+#include "tests/temp_dir.h"
 
 namespace p2i::slam_sink::testing {
 
-/// A fresh empty folder under the temp dir, removed by the destructor.
-class TempDir {
- public:
-  explicit TempDir(const std::string& tag) {
-    static int counter = 0;
-    path_ = std::filesystem::temp_directory_path() /
-            ("p2i_slam_sink_" + tag + "_" + std::to_string(::getpid()) + "_" +
-             std::to_string(counter++));
-    std::filesystem::remove_all(path_);
-    std::filesystem::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    std::filesystem::remove_all(path_, ec);
-  }
-  std::string str() const { return path_.string(); }
-  std::filesystem::path path() const { return path_; }
-
- private:
-  std::filesystem::path path_;
-};
+using p2i::testing::TempDir;
 
 inline scene::CameraInfo SmallCamera(int width = 160, int height = 120) {
   const double f = 0.75 * width;

@@ -55,13 +55,13 @@ TEST_CASE("p2i_slam_sink writes published views, reports the lost one, flushes o
   runtime::Shutdown::ResetForTesting();
   TempDir run_dir("run");
   TempDir out("node_out");
-  setenv("P2I_RUN_DIR", run_dir.str().c_str(), 1);
-  const std::string camera_file = run_dir.str() + "/camera.yaml";
+  setenv("P2I_RUN_DIR", run_dir.path().c_str(), 1);
+  const std::string camera_file = run_dir.path() + "/camera.yaml";
   SmallCamera().ToYamlFile(camera_file);
-  const std::string out_dir = out.str() + "/seq";
+  const std::string out_dir = out.path() + "/seq";
 
   const std::string exe = p2i::testing::BinDir() + "/p2i_slam_sink";
-  const std::string err_path = run_dir.str() + "/sink_stderr.txt";
+  const std::string err_path = run_dir.path() + "/sink_stderr.txt";
   std::vector<std::string> args = {exe, "out_dir:=" + out_dir, "camera_info_file:=" + camera_file,
                                    "status_period:=0.05", "policy:=flag", "summary_period:=0"};
   const pid_t pid = fork();

@@ -47,7 +47,7 @@ nlohmann::json ReadJson(const std::filesystem::path& path) {
 TEST_CASE("SlamSink with policy flag writes every frame and marks the failing one", "[unit]") {
   TempDir dir("flag");
   SlamSinkOptions options;
-  options.writer.out_dir = dir.str();
+  options.writer.out_dir = dir.path();
   options.policy = "flag";
   {
     SlamSink sink(options, SmallCamera());
@@ -62,7 +62,7 @@ TEST_CASE("SlamSink with policy flag writes every frame and marks the failing on
     CHECK_FALSE(outcomes[4].written);
     sink.Close();
   }
-  const auto lines = DataLines(dir.path() / "frames.txt");
+  const auto lines = DataLines(dir / "frames.txt");
   REQUIRE(lines.size() == 4);
   std::map<std::string, std::string> check_by_seq;
   for (const auto& line : lines) {
@@ -73,7 +73,7 @@ TEST_CASE("SlamSink with policy flag writes every frame and marks the failing on
   CHECK(check_by_seq["/synthesizer:3"] == "pass");
   CHECK(check_by_seq["/camera:40"] == "real");
 
-  const nlohmann::json summary = ReadJson(dir.path() / "summary.json");
+  const nlohmann::json summary = ReadJson(dir / "summary.json");
   CHECK(summary["frames_written"] == 4);
   CHECK(summary["synthetic_written"] == 3);
   CHECK(summary["real_written"] == 1);
@@ -90,7 +90,7 @@ TEST_CASE("SlamSink with policy flag writes every frame and marks the failing on
   // The sequence reads back with the project's TUM reader, calibration included.
   scene::TumRgbdOptions read_options;
   read_options.max_pose_gap = 1.0;
-  const scene::DatasetIndex index = scene::ReadTumRgbd(dir.str(), read_options);
+  const scene::DatasetIndex index = scene::ReadTumRgbd(dir.path(), read_options);
   CHECK(index.size() == 4);
   CHECK(index.camera().fx() == Approx(SmallCamera().fx()));
   const scene::RgbdSample first = index.Load(0);
@@ -102,7 +102,7 @@ TEST_CASE("SlamSink with policy flag writes every frame and marks the failing on
 TEST_CASE("SlamSink with policy drop does not write failing frames", "[unit]") {
   TempDir dir("drop");
   SlamSinkOptions options;
-  options.writer.out_dir = dir.str();
+  options.writer.out_dir = dir.path();
   options.policy = "drop";
   options.write_real = false;
   {
@@ -110,26 +110,26 @@ TEST_CASE("SlamSink with policy drop does not write failing frames", "[unit]") {
     for (const auto& f : Stream()) sink.Process(f);
     sink.Close();
   }
-  const auto lines = DataLines(dir.path() / "frames.txt");
+  const auto lines = DataLines(dir / "frames.txt");
   REQUIRE(lines.size() == 2);
   for (const auto& line : lines) {
     CHECK(Split(line)[4] != "fail");
     CHECK(Split(line)[3] == "synthetic");
   }
-  const nlohmann::json summary = ReadJson(dir.path() / "summary.json");
+  const nlohmann::json summary = ReadJson(dir / "summary.json");
   CHECK(summary["check"]["dropped"] == 1);
   CHECK(summary["real_skipped"] == 1);
-  CHECK(DataLines(dir.path() / "rgb.txt").size() == 2);
+  CHECK(DataLines(dir / "rgb.txt").size() == 2);
 }
 
 TEST_CASE("SlamSink without a camera writes everything unchecked", "[unit]") {
   TempDir dir("nocam");
   SlamSinkOptions options;
-  options.writer.out_dir = dir.str();
+  options.writer.out_dir = dir.path();
   SlamSink sink(options, std::nullopt);
   for (const auto& f : Stream()) sink.Process(f);
   sink.Close();
-  const nlohmann::json summary = ReadJson(dir.path() / "summary.json");
+  const nlohmann::json summary = ReadJson(dir / "summary.json");
   CHECK(summary["check"]["enabled"] == false);
   CHECK(summary["frames_written"] == 4);
 }

@@ -47,7 +47,7 @@ SinkFrame PatternFrame(double stamp, uint64_t seq, bool synthetic, int width = 6
 
 TumSequenceWriterOptions OptionsFor(const TempDir& dir) {
   TumSequenceWriterOptions options;
-  options.out_dir = dir.str();
+  options.out_dir = dir.path();
   return options;
 }
 
@@ -60,14 +60,14 @@ TEST_CASE("TumSequenceWriter round-trips colour exactly and depth within 1/5000 
     for (uint64_t i = 0; i < 3; ++i) {
       frames.push_back(PatternFrame(100.0 + 0.1 * i, i, true));
       const WrittenFiles files = writer.Write(frames.back());
-      CHECK(fs::exists(dir.path() / files.rgb));
-      CHECK(fs::exists(dir.path() / files.depth));
+      CHECK(fs::exists(dir / files.rgb));
+      CHECK(fs::exists(dir / files.depth));
     }
     writer.Close();
     CHECK(writer.frames_written() == 3);
   }
-  const auto rgb_lines = DataLines(dir.path() / "rgb.txt");
-  const auto depth_lines = DataLines(dir.path() / "depth.txt");
+  const auto rgb_lines = DataLines(dir / "rgb.txt");
+  const auto depth_lines = DataLines(dir / "depth.txt");
   REQUIRE(rgb_lines.size() == 3);
   REQUIRE(depth_lines.size() == 3);
   for (size_t i = 0; i < frames.size(); ++i) {
@@ -76,13 +76,13 @@ TEST_CASE("TumSequenceWriter round-trips colour exactly and depth within 1/5000 
     REQUIRE(rgb_tokens.size() == 2);
     REQUIRE(depth_tokens.size() == 2);
     CHECK(std::stod(rgb_tokens[0]) == Approx(frames[i].stamp).margin(1e-6));
-    cv::Mat bgr = cv::imread((dir.path() / rgb_tokens[1]).string(), cv::IMREAD_UNCHANGED);
+    cv::Mat bgr = cv::imread((dir / rgb_tokens[1]), cv::IMREAD_UNCHANGED);
     REQUIRE(bgr.type() == CV_8UC3);
     cv::Mat rgb;
     cv::cvtColor(bgr, rgb, cv::COLOR_BGR2RGB);
     CHECK(cv::norm(rgb, frames[i].rgb, cv::NORM_INF) == 0.0);
 
-    cv::Mat units = cv::imread((dir.path() / depth_tokens[1]).string(), cv::IMREAD_UNCHANGED);
+    cv::Mat units = cv::imread((dir / depth_tokens[1]), cv::IMREAD_UNCHANGED);
     REQUIRE(units.type() == CV_16UC1);
     const cv::Mat metres = TumSequenceWriter::DepthFromUnits(units, 5000.0);
     CHECK(metres.at<float>(0, 0) == 0.0f);
@@ -132,15 +132,15 @@ TEST_CASE("TumSequenceWriter text files follow the TUM formats and the reader ac
     writer.Close();
   }
   // Headers as TUM writes them.
-  std::ifstream rgb_in(dir.path() / "rgb.txt");
+  std::ifstream rgb_in(dir / "rgb.txt");
   std::string first;
   std::getline(rgb_in, first);
   CHECK(first == "# color images");
-  std::ifstream depth_in(dir.path() / "depth.txt");
+  std::ifstream depth_in(dir / "depth.txt");
   std::getline(depth_in, first);
   CHECK(first == "# depth maps");
 
-  const auto rgb = DataLines(dir.path() / "rgb.txt");
+  const auto rgb = DataLines(dir / "rgb.txt");
   REQUIRE(rgb.size() == 5);
   double last = -1.0;
   for (const auto& line : rgb) {
@@ -148,10 +148,10 @@ TEST_CASE("TumSequenceWriter text files follow the TUM formats and the reader ac
     REQUIRE(t.size() == 2);
     CHECK(std::stod(t[0]) > last);  // sorted by time after Close()
     last = std::stod(t[0]);
-    CHECK(fs::exists(dir.path() / t[1]));
+    CHECK(fs::exists(dir / t[1]));
   }
   // Groundtruth: 4 frames had a pose; each line parses as a TUM pose with the frame's pose.
-  const auto gt = DataLines(dir.path() / "groundtruth.txt");
+  const auto gt = DataLines(dir / "groundtruth.txt");
   REQUIRE(gt.size() == 4);
   for (const auto& line : gt) {
     double stamp = 0.0;
@@ -160,7 +160,7 @@ TEST_CASE("TumSequenceWriter text files follow the TUM formats and the reader ac
     CHECK(pose.equals(PatternFrame(stamp, seq, true).pose, 1e-6));
   }
   // associations.txt: "t rgb t depth" with matching names.
-  const auto assoc = DataLines(dir.path() / "associations.txt");
+  const auto assoc = DataLines(dir / "associations.txt");
   REQUIRE(assoc.size() == 5);
   for (const auto& line : assoc) {
     const auto t = Split(line);
@@ -170,7 +170,7 @@ TEST_CASE("TumSequenceWriter text files follow the TUM formats and the reader ac
     CHECK(t[3].substr(0, 6) == "depth/");
   }
   // frames.txt: the per-frame source flag and check result.
-  const auto frames = DataLines(dir.path() / "frames.txt");
+  const auto frames = DataLines(dir / "frames.txt");
   REQUIRE(frames.size() == 5);
   int synthetic = 0, real = 0, failed = 0;
   for (const auto& line : frames) {
@@ -189,7 +189,7 @@ TEST_CASE("TumSequenceWriter text files follow the TUM formats and the reader ac
   scene::TumRgbdOptions options;
   options.max_pose_gap = 0.2;  // the pose-less real frame at 10.25 is interpolated
   int dropped = -1;
-  const scene::DatasetIndex index = scene::ReadTumRgbd(dir.str(), options, &dropped);
+  const scene::DatasetIndex index = scene::ReadTumRgbd(dir.path(), options, &dropped);
   CHECK(index.size() == 5);
   CHECK(dropped == 0);
 }
@@ -209,9 +209,9 @@ TEST_CASE("TumSequenceWriter refuses to mix runs unless appending, and never reu
     const WrittenFiles again = writer.Write(PatternFrame(5.0, 0, true));  // same stamp
     CHECK(again.rgb != "rgb/5.000000_syn.png");
   }
-  const auto rgb = DataLines(dir.path() / "rgb.txt");
+  const auto rgb = DataLines(dir / "rgb.txt");
   CHECK(rgb.size() == 2);
-  std::ifstream in(dir.path() / "rgb.txt");
+  std::ifstream in(dir / "rgb.txt");
   const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   size_t headers = 0;
   for (size_t p = text.find("# color images"); p != std::string::npos;
@@ -230,7 +230,7 @@ TEST_CASE("TumSequenceWriter rejects malformed frames without writing", "[unit]"
   frame = PatternFrame(NAN, 0, true);
   CHECK_THROWS_AS(writer.Write(frame), std::invalid_argument);
   CHECK(writer.frames_written() == 0);
-  CHECK(DataLines(dir.path() / "rgb.txt").empty());
+  CHECK(DataLines(dir / "rgb.txt").empty());
 }
 
 TEST_CASE("TumSequenceWriter killed with SIGKILL mid-run lists only complete files",
@@ -252,7 +252,7 @@ TEST_CASE("TumSequenceWriter killed with SIGKILL mid-run lists only complete fil
   }
   // Kill it at an arbitrary instant once it has written a few frames.
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
-  while (DataLines(dir.path() / "frames.txt").size() < 8 &&
+  while (DataLines(dir / "frames.txt").size() < 8 &&
          std::chrono::steady_clock::now() < deadline) {
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
   }
@@ -264,7 +264,7 @@ TEST_CASE("TumSequenceWriter killed with SIGKILL mid-run lists only complete fil
 
   size_t checked = 0;
   for (const char* index : {"rgb.txt", "depth.txt", "associations.txt", "frames.txt"}) {
-    const auto lines = DataLines(dir.path() / index);
+    const auto lines = DataLines(dir / index);
     CHECK(lines.size() >= 8);
     for (const auto& line : lines) {
       const auto t = Split(line);
@@ -278,7 +278,7 @@ TEST_CASE("TumSequenceWriter killed with SIGKILL mid-run lists only complete fil
       if (fields == 4) files = {t[1], t[3]};
       if (fields == 9) files = {t[8]};
       for (const auto& f : files) {
-        const cv::Mat image = cv::imread((dir.path() / f).string(), cv::IMREAD_UNCHANGED);
+        const cv::Mat image = cv::imread((dir / f), cv::IMREAD_UNCHANGED);
         INFO(index << ": " << f);
         REQUIRE(!image.empty());
         CHECK(image.cols == 320);
@@ -288,7 +288,7 @@ TEST_CASE("TumSequenceWriter killed with SIGKILL mid-run lists only complete fil
     }
   }
   CHECK(checked >= 32);
-  const auto gt = DataLines(dir.path() / "groundtruth.txt");
+  const auto gt = DataLines(dir / "groundtruth.txt");
   for (const auto& line : gt) {
     double stamp = 0.0;
     CHECK_NOTHROW(scene::Pose::FromTumLine(line, &stamp));

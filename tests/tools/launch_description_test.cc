@@ -10,6 +10,7 @@
 
 #include <catch2/catch.hpp>
 
+#include "tests/temp_dir.h"
 #include "tools/launch_command.h"
 
 using p2i::tools::BuildNodeCommand;
@@ -23,27 +24,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-// A fresh folder per test case, removed at the end.
-class TempDir {
- public:
-  TempDir() {
-    static int counter = 0;
-    path_ = fs::temp_directory_path() /
-            ("p2i_launch_test_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
-    fs::create_directories(path_);
-  }
-  ~TempDir() { fs::remove_all(path_); }
-  std::string Write(const std::string& name, const std::string& text) const {
-    const fs::path p = path_ / name;
-    fs::create_directories(p.parent_path());
-    std::ofstream(p) << text;
-    return p.string();
-  }
-  std::string path() const { return path_.string(); }
-
- private:
-  fs::path path_;
-};
+using p2i::testing::TempDir;
 
 std::string ErrorOf(const std::string& file, const std::map<std::string, std::string>& o = {}) {
   try {

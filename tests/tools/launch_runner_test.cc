@@ -20,6 +20,7 @@
 
 #include <catch2/catch.hpp>
 
+#include "tests/temp_dir.h"
 #include "tests/test_paths.h"
 
 namespace fs = std::filesystem;
@@ -28,24 +29,7 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-class TempDir {
- public:
-  TempDir() {
-    static int counter = 0;
-    path_ = fs::temp_directory_path() /
-            ("p2i_launch_it_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
-    fs::create_directories(path_);
-  }
-  ~TempDir() { fs::remove_all(path_); }
-  std::string Write(const std::string& name, const std::string& text) const {
-    std::ofstream(path_ / name) << text;
-    return (path_ / name).string();
-  }
-  std::string path() const { return path_.string(); }
-
- private:
-  fs::path path_;
-};
+using p2i::testing::TempDir;
 
 // `p2i launch ...` as a child process with stdout and stderr captured.
 class Launcher {

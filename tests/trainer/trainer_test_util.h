@@ -2,9 +2,7 @@
 /// @brief Shared helpers of the trainer tests: temp folders, a tiny config, sim frames.
 #pragma once
 
-#include <unistd.h>
-
-#include <filesystem>
+#include <algorithm>
 #include <string>
 #include <vector>
 
@@ -12,35 +10,20 @@
 #include "scene/rgbd_sample.h"
 #include "scene/sim_scene.h"
 #include "scene/trajectory.h"
+#include "tests/temp_dir.h"
+#include "tests/tiny_config.h"
 
 namespace p2i::trainer::testing {
 
+/// p2i::testing::FreshDir under the trainer tests' prefix (kept after the test for inspection).
 inline std::string TempDir(const std::string& name) {
-  const auto dir = std::filesystem::temp_directory_path() /
-                   ("p2i_trainer_test_" + name + "_" + std::to_string(::getpid()));
-  std::filesystem::remove_all(dir);
-  std::filesystem::create_directories(dir);
-  return dir.string();
+  return p2i::testing::FreshDir("trainer_test_" + name);
 }
 
-/// A 32x32 P2I-NET small enough to train a few steps per second on one core.
+/// tests/tiny_config.h's model, checkpointed every 5 steps.
 inline model::P2iConfig TinyConfig() {
-  model::P2iConfig c;
-  c.name = "tiny";
-  c.resolution = 32;
-  c.g_schedule = "custom";
-  c.g_widths = {16, 16, 8, 8};
-  c.g_fc_width = 16;
-  c.d_base_width = 8;
-  c.d_max_width = 16;
-  c.latent_dim = 32;
-  c.mapping_width = 16;
-  c.enet_width = 8;
-  c.enet_blocks = 1;
-  c.batch_size = 4;
-  c.val_every = 5;
+  model::P2iConfig c = p2i::testing::TinyConfig();
   c.checkpoint_every = 5;
-  c.Validate();
   return c;
 }
 

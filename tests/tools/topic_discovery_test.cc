@@ -32,7 +32,7 @@ std::string Until(const std::string& command, const std::string& needle, int sec
 }  // namespace
 
 TEST_CASE("p2i topic list finds a running launch without P2I_RUN_DIR exported", "[integration]") {
-  const std::string dir = p2i::testing::SourceDir() + "/tests/nodes";
+  const std::string dir = p2i::testing::SourceDir() + "/tests/tools";
   const std::string log = "/tmp/p2i-discovery-test-" + std::to_string(getpid()) + ".log";
   const pid_t launch = StartLaunch({dir + "/one_node.yaml"}, "", log);
   const std::string p2i = "env -u P2I_RUN_DIR " + p2i::testing::BinDir() + "/p2i";
@@ -50,7 +50,7 @@ TEST_CASE("p2i topic list finds a running launch without P2I_RUN_DIR exported", 
 }
 
 TEST_CASE("A graph split over two launchers finds its topics through their registries", "[integration]") {
-  const std::string dir = p2i::testing::SourceDir() + "/tests/nodes";
+  const std::string dir = p2i::testing::SourceDir() + "/tests/tools";
   const int base = 20000 + (getpid() % 20000);
   const std::string pa = std::to_string(base), pb = std::to_string(base + 1);
   const std::string tmp = "/tmp/p2i-two-machines-" + std::to_string(getpid());

@@ -15,38 +15,31 @@
 #include <nlohmann/json.hpp>
 
 #include "tests/process_util.h"
+#include "tests/temp_dir.h"
 #include "tests/test_paths.h"
+#include "tests/tiny_config.h"
 
 namespace fs = std::filesystem;
 
 namespace {
 
-constexpr const char* kTinyConfig = R"(name: tiny
-model: p2i_net
-resolution: 32
-g_schedule: custom
-g_widths: [16, 16, 8, 8]
-d_base_width: 8
-d_max_width: 16
-enet: true
-enet_width: 8
-enet_blocks: 1
-batch_size: 4
-steps_phase1: 6
-steps_phase2: 3
-val_every: 3
-checkpoint_every: 3
-)";
+// tests/tiny_config.h's model, 6 + 3 steps, validated every 3.
+std::string TinyYaml() {
+  p2i::model::P2iConfig c = p2i::testing::TinyConfig();
+  c.steps_phase1 = 6;
+  c.steps_phase2 = 3;
+  c.val_every = 3;
+  c.Validate();
+  return c.ToYamlString();
+}
 
 }  // namespace
 
 TEST_CASE("p2i train writes a progress bar, a JSON-lines log and a checkpoint; --resume continues",
           "[integration]") {
-  const fs::path dir = fs::temp_directory_path() / ("p2i_train_tool_" + std::to_string(getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
+  const fs::path dir = p2i::testing::FreshDir("train_tool");
   {
-    std::ofstream(dir / "tiny.yaml") << kTinyConfig;
+    std::ofstream(dir / "tiny.yaml") << TinyYaml();
   }
   const std::string p2i = p2i::testing::BinDir() + "/p2i";
   const std::string base = p2i + " train " + (dir / "tiny.yaml").string() +
@@ -78,7 +71,7 @@ TEST_CASE("p2i train writes a progress bar, a JSON-lines log and a checkpoint; -
 
   // Bad input: a config with an unknown key is refused, naming the key and the file.
   {
-    std::ofstream(dir / "bad.yaml") << std::string(kTinyConfig) << "widht: 3\n";
+    std::ofstream(dir / "bad.yaml") << TinyYaml() << "\nwidht: 3\n";
   }
   const std::string bad = p2i::testing::RunCommand(p2i + " train " + (dir / "bad.yaml").string() +
                                   " --data procedural --out " + (dir / "bad").string() + " 2>&1",
