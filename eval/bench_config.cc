@@ -11,13 +11,13 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "scene/sim_yaml_reader.h"
+#include "scene/strict_yaml_reader.h"
 
 namespace p2i::eval {
 namespace fs = std::filesystem;
 namespace {
 
-using Reader = scene::SimYamlReader;
+using Reader = scene::StrictYamlReader;
 
 int Int(const Reader& r, const YAML::Node& n, const std::string& what, int min_value) {
   const double v = r.Double(n, what);

@@ -240,7 +240,7 @@ void Evaluate(model::ViewSynthesizer& method, const scene::RgbdDataset& test,
   row->views.clear();
   for (const auto& gt : test.frames) {
     rec.Start();
-    model::View v = method.Render(gt.pose);
+    scene::RgbdSample v = method.Render(gt.pose);
     rec.Stop();
     if (v.rgb.size() != gt.rgb.size()) cv::resize(v.rgb, v.rgb, gt.rgb.size(), 0, 0, cv::INTER_AREA);
     if (!v.depth.empty() && v.depth.size() != gt.depth.size())
@@ -339,7 +339,7 @@ std::vector<StabilityPoint> RunStability(model::ViewSynthesizer& method, const s
   if (header) lines << "method,kind,offset,sample,psnr_db,nearest_distance,tx,ty,tz,qx,qy,qz,qw\n";
   for (size_t i = 0; i < samples.size(); ++i) {
     const auto& s = samples[i];
-    model::View v = method.Render(s.pose);
+    scene::RgbdSample v = method.Render(s.pose);
     if (v.rgb.size() != s.gt.rgb.size()) cv::resize(v.rgb, v.rgb, s.gt.rgb.size(), 0, 0, cv::INTER_AREA);
     const auto key = std::make_pair(s.kind, s.offset);
     const double p = model::Psnr(v.rgb, s.gt.rgb);

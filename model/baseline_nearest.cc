@@ -9,13 +9,13 @@
 #include <yaml-cpp/yaml.h>
 
 #include "model/coverage.h"
-#include "scene/sim_yaml_reader.h"
+#include "scene/strict_yaml_reader.h"
 
 namespace p2i::model {
 
 NearestKeyframeOptions NearestKeyframeOptions::FromYaml(const YAML::Node& node,
                                                         const std::string& source) {
-  const scene::SimYamlReader r(source);
+  const scene::StrictYamlReader r(source);
   r.CheckKeys(node, {"metres_per_degree"}, "nearest_keyframe options");
   NearestKeyframeOptions o;
   if (node["metres_per_degree"]) o.metres_per_degree = r.Double(node["metres_per_degree"], "metres_per_degree");
@@ -49,9 +49,9 @@ size_t NearestKeyframe::NearestIndex(const scene::Pose& pose) const {
   return NearestPoseIndices(poses_, pose, 1, options_.metres_per_degree).front();
 }
 
-View NearestKeyframe::Render(const scene::Pose& pose) {
+scene::RgbdSample NearestKeyframe::Render(const scene::Pose& pose) {
   const scene::RgbdSample& f = training_.frames[NearestIndex(pose)];
-  View v;
+  scene::RgbdSample v;
   v.stamp = f.stamp;
   v.pose = pose;
   v.rgb = f.rgb.clone();

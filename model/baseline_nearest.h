@@ -25,7 +25,7 @@ struct NearestKeyframeOptions {
 };
 
 /// The simplest "renderer": no synthesis, just the recorded frame from the closest training pose
-/// (CombinedPoseDistance). The returned View is a deep copy of that frame's rgb and depth at the
+/// (CombinedPoseDistance). The returned view is a deep copy of that frame's rgb and depth at the
 /// dataset camera's resolution, with `pose` set to the requested pose, `stamp` to the frame's and
 /// `id` to "nearest:<frame id>". Search is brute force, O(n) per query (a few thousand frames
 /// take microseconds; a k-d tree would not pay off for a 6-DoF mixed metric at this size).
@@ -37,7 +37,7 @@ class NearestKeyframe : public ViewSynthesizer {
 
   std::string Name() const override { return "nearest_keyframe"; }
   scene::CameraInfo Camera() const override { return training_.camera; }
-  View Render(const scene::Pose& pose) override;
+  scene::RgbdSample Render(const scene::Pose& pose) override;
 
   /// Index into the training frames of the closest pose (ties: the lower index).
   size_t NearestIndex(const scene::Pose& pose) const;

@@ -13,7 +13,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "model/coverage.h"
-#include "scene/sim_yaml_reader.h"
+#include "scene/strict_yaml_reader.h"
 
 namespace p2i::model {
 namespace {
@@ -96,7 +96,7 @@ void PushPullFill(cv::Mat& image, const cv::Mat& valid) {
 }  // namespace
 
 DepthWarpOptions DepthWarpOptions::FromYaml(const YAML::Node& node, const std::string& source) {
-  const scene::SimYamlReader r(source);
+  const scene::StrictYamlReader r(source);
   r.CheckKeys(node, {"k", "metres_per_degree", "z_tolerance", "fill_holes"}, "depth_warp options");
   DepthWarpOptions o;
   if (node["k"]) {
@@ -156,7 +156,7 @@ DepthWarp::DepthWarp(scene::RgbdDataset training, DepthWarpOptions options,
   }
 }
 
-View DepthWarp::Render(const scene::Pose& pose) {
+scene::RgbdSample DepthWarp::Render(const scene::Pose& pose) {
   const auto nearest =
       NearestPoseIndices(poses_, pose, static_cast<size_t>(options_.k), options_.metres_per_degree);
   std::vector<Warped> warped;
@@ -167,7 +167,7 @@ View DepthWarp::Render(const scene::Pose& pose) {
                              1e-3));
   }
   const int h = output_camera_.image_height, w = output_camera_.image_width;
-  View out;
+  scene::RgbdSample out;
   out.pose = pose;
   out.id = "depth_warp";
   out.rgb = cv::Mat::zeros(h, w, CV_8UC3);

@@ -57,7 +57,7 @@ class DepthWarp : public ViewSynthesizer {
 
   std::string Name() const override { return "depth_warp"; }
   scene::CameraInfo Camera() const override { return output_camera_; }
-  View Render(const scene::Pose& pose) override;
+  scene::RgbdSample Render(const scene::Pose& pose) override;
 
   /// Fraction of output pixels no source reached in the last Render (before any hole fill).
   double LastHoleFraction() const { return last_hole_fraction_; }

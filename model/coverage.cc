@@ -12,7 +12,7 @@
 
 #include <yaml-cpp/yaml.h>
 
-#include "scene/sim_yaml_reader.h"
+#include "scene/strict_yaml_reader.h"
 
 namespace p2i::model {
 namespace {
@@ -49,7 +49,7 @@ std::vector<size_t> NearestPoseIndices(const std::vector<scene::Pose>& poses,
 }
 
 CoverageOptions CoverageOptions::FromYaml(const YAML::Node& node, const std::string& source) {
-  const scene::SimYamlReader r(source);
+  const scene::StrictYamlReader r(source);
   r.CheckKeys(node, {"metres_per_degree", "falloff", "fallback_spacing_m"}, "coverage options");
   CoverageOptions o;
   if (node["metres_per_degree"]) o.metres_per_degree = r.Double(node["metres_per_degree"], "metres_per_degree");

@@ -9,7 +9,7 @@
 #include "model/baseline_nearest.h"
 #include "model/baseline_warp.h"
 #include "model/p2i_synthesizer.h"
-#include "scene/sim_yaml_reader.h"
+#include "scene/strict_yaml_reader.h"
 
 namespace p2i::model {
 namespace {
@@ -27,7 +27,7 @@ void RequireFrames(const MethodInputs& in, const std::string& method) {
 /// p2i and cnn: a checkpoint of model::Trainer; LoadSynthesizer reads which network it holds.
 MethodFactory ConfigureLearned(const YAML::Node& options, const std::string& source) {
   if (!NoOptions(options) && options.size() > 0) {
-    scene::SimYamlReader(source).CheckKeys(options, {}, "the options of a learned method");
+    scene::StrictYamlReader(source).CheckKeys(options, {}, "the options of a learned method");
   }
   return [](const MethodInputs& in) -> std::unique_ptr<ViewSynthesizer> {
     if (in.checkpoint_path.empty()) {

@@ -26,7 +26,7 @@ struct P2iSynthesizer::Impl {
   bool use_enet = false;
   SynthesizerOptions options;
   torch::Tensor input;  // 1 x 7, reused for single renders
-  std::string path;
+  std::string path;     // the checkpoint, named by the probe's refusals
 
   torch::Tensor Forward(const torch::Tensor& poses) {
     auto out = nets->g->forward(poses);
@@ -40,9 +40,10 @@ struct P2iSynthesizer::Impl {
     std::memcpy(dst, n.data(), sizeof(float) * 7);
   }
 
-  View ToView(const torch::Tensor& image, const scene::Pose& pose) const {  // C x R x R
+  // image: C x R x R.
+  scene::RgbdSample ToView(const torch::Tensor& image, const scene::Pose& pose) const {
     const int r = meta.config.resolution;
-    View view;
+    scene::RgbdSample view;
     view.pose = pose;
     view.id = "p2i";
     auto rgb = ((image.slice(0, 0, 3) + 1.0) * 127.5)
@@ -119,15 +120,16 @@ scene::CameraInfo P2iSynthesizer::Camera() const { return impl_->meta.camera; }
 
 bool P2iSynthesizer::UsesEnet() const { return impl_->use_enet; }
 
-View P2iSynthesizer::Render(const scene::Pose& pose) {
+scene::RgbdSample P2iSynthesizer::Render(const scene::Pose& pose) {
   c10::InferenceMode guard;
   impl_->FillPose(pose, impl_->input.data_ptr<float>());
   const auto out = impl_->Forward(impl_->input);
   return impl_->ToView(out[0], pose);
 }
 
-std::vector<View> P2iSynthesizer::RenderBatch(const std::vector<scene::Pose>& poses) {
-  std::vector<View> views;
+std::vector<scene::RgbdSample> P2iSynthesizer::RenderBatch(
+    const std::vector<scene::Pose>& poses) {
+  std::vector<scene::RgbdSample> views;
   if (poses.empty()) return views;
   c10::InferenceMode guard;
   auto input = torch::empty({static_cast<int64_t>(poses.size()), 7});

@@ -32,8 +32,8 @@ class P2iSynthesizer : public ViewSynthesizer {
 
   std::string Name() const override;
   scene::CameraInfo Camera() const override;
-  View Render(const scene::Pose& pose) override;
-  std::vector<View> RenderBatch(const std::vector<scene::Pose>& poses) override;
+  scene::RgbdSample Render(const scene::Pose& pose) override;
+  std::vector<scene::RgbdSample> RenderBatch(const std::vector<scene::Pose>& poses) override;
   int64_t ParameterCount() const override;
   double FlopsPerView() const override;
 

@@ -13,11 +13,10 @@
 
 namespace p2i::model {
 
-/// A synthesized view: rgb CV_8UC3 (RGB order), depth CV_32FC1 metres with 0 = invalid,
-/// at the method's output resolution described by `camera`.
-using View = scene::RgbdSample;
-
-/// P2I-NET, the CNN baseline, nearest keyframe, depth warp... all behind one interface.
+/// P2I-NET, the CNN baseline, nearest keyframe, depth warp... all behind one interface. A
+/// synthesized view is a scene::RgbdSample (the wire form is msgs::View): rgb CV_8UC3 (RGB
+/// order), depth CV_32FC1 metres with 0 = invalid, at the resolution of Camera(); its pose is
+/// the requested pose.
 /// Implementations are not thread-safe unless they say so: one caller at a time.
 class ViewSynthesizer {
  public:
@@ -27,10 +26,10 @@ class ViewSynthesizer {
   /// Calibration of the views it returns (resolution and intrinsics).
   virtual scene::CameraInfo Camera() const = 0;
 
-  virtual View Render(const scene::Pose& pose) = 0;
+  virtual scene::RgbdSample Render(const scene::Pose& pose) = 0;
   /// Default: one Render per pose. Learned methods override with a real batch.
-  virtual std::vector<View> RenderBatch(const std::vector<scene::Pose>& poses) {
-    std::vector<View> out;
+  virtual std::vector<scene::RgbdSample> RenderBatch(const std::vector<scene::Pose>& poses) {
+    std::vector<scene::RgbdSample> out;
     out.reserve(poses.size());
     for (const auto& p : poses) out.push_back(Render(p));
     return out;

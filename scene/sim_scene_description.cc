@@ -11,7 +11,7 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "scene/sim_yaml_reader.h"
+#include "scene/strict_yaml_reader.h"
 
 namespace p2i::scene {
 namespace {
@@ -22,7 +22,7 @@ std::uint32_t HashName(const std::string& s) {
   return h;
 }
 
-SimTexture ParseTexture(const SimYamlReader& r, const YAML::Node& node) {
+SimTexture ParseTexture(const StrictYamlReader& r, const YAML::Node& node) {
   static const std::map<std::string, SimTexture> kNames = {
       {"solid", SimTexture::kSolid},    {"checker", SimTexture::kChecker},
       {"tiles", SimTexture::kTiles},    {"wood", SimTexture::kWood},
@@ -56,7 +56,7 @@ SimSceneDescription SimSceneDescription::FromYamlString(const std::string& text,
     throw std::runtime_error(source + ":" + std::to_string(e.mark.line + 1) +
                              ": YAML syntax error: " + e.msg);
   }
-  const SimYamlReader r(source);
+  const StrictYamlReader r(source);
   r.CheckKeys(root, {"name", "room", "ambient", "materials", "lights", "objects"}, "scene");
 
   SimSceneDescription d;

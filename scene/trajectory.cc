@@ -10,7 +10,7 @@
 #include <stdexcept>
 
 #include "scene/sim_scene.h"
-#include "scene/sim_yaml_reader.h"
+#include "scene/strict_yaml_reader.h"
 
 namespace p2i::scene {
 namespace {
@@ -39,7 +39,7 @@ void CheckPositive(double v, const char* name) {
 template <typename Options, typename Fill>
 Options Parse(const YAML::Node& node, const std::string& source, const std::string& what,
               std::set<std::string> keys, bool allow_type, Fill fill) {
-  const SimYamlReader r(source);
+  const StrictYamlReader r(source);
   // GenerateTrajectoriesFromYaml passes the whole map, `type` included (copying the node
   // without it would lose the line numbers for error messages).
   if (allow_type) keys.insert("type");
@@ -84,7 +84,7 @@ static ArmSweepOptions ParseArmSweepOptions(const YAML::Node& node, const std::s
   return Parse<ArmSweepOptions>(node, source, "arm_sweep",
                                 {"base", "reach", "center_yaw_deg", "arc_deg", "heights",
                                  "pitch_deg", "speed", "rate_hz", "start_time"},
-                                allow_type, [&](const SimYamlReader& r, ArmSweepOptions* o) {
+                                allow_type, [&](const StrictYamlReader& r, ArmSweepOptions* o) {
                                   r.OptionalVec3(node, "base", "arm_sweep", &o->base);
                                   r.OptionalDouble(node, "reach", "arm_sweep", &o->reach);
                                   r.OptionalDouble(node, "center_yaw_deg", "arm_sweep",
@@ -180,7 +180,7 @@ static AdjacentSweepsOptions ParseAdjacentSweepsOptions(const YAML::Node& node,
                                                         bool allow_type) {
   return Parse<AdjacentSweepsOptions>(
       node, source, "adjacent_sweeps", {"sweep", "count", "offset", "axis"}, allow_type,
-      [&](const SimYamlReader& r, AdjacentSweepsOptions* o) {
+      [&](const StrictYamlReader& r, AdjacentSweepsOptions* o) {
         if (node["sweep"]) o->sweep = ArmSweepOptions::FromYaml(node["sweep"], source);
         if (node["count"]) {
           const double c = r.Double(node["count"], "adjacent_sweeps.count");
@@ -237,7 +237,7 @@ static OrbitOptions ParseOrbitOptions(const YAML::Node& node, const std::string&
   return Parse<OrbitOptions>(node, source, "orbit",
                              {"center", "radius", "height", "revolutions", "start_angle_deg",
                               "speed", "rate_hz", "start_time"},
-                             allow_type, [&](const SimYamlReader& r, OrbitOptions* o) {
+                             allow_type, [&](const StrictYamlReader& r, OrbitOptions* o) {
                                r.OptionalVec3(node, "center", "orbit", &o->center);
                                r.OptionalDouble(node, "radius", "orbit", &o->radius);
                                r.OptionalDouble(node, "height", "orbit", &o->height);
@@ -289,7 +289,7 @@ static RandomWalkOptions ParseRandomWalkOptions(const YAML::Node& node, const st
       node, source, "random_walk",
       {"duration", "speed", "max_turn_rate_deg", "wall_margin", "clearance", "min_height",
        "max_height", "seed", "rate_hz", "start_time"},
-      allow_type, [&](const SimYamlReader& r, RandomWalkOptions* o) {
+      allow_type, [&](const StrictYamlReader& r, RandomWalkOptions* o) {
         r.OptionalDouble(node, "duration", "random_walk", &o->duration);
         r.OptionalDouble(node, "speed", "random_walk", &o->speed);
         r.OptionalDouble(node, "max_turn_rate_deg", "random_walk", &o->max_turn_rate_deg);
@@ -412,7 +412,7 @@ std::vector<StampedPose> GenerateRandomWalk(const RandomWalkOptions& o, const Si
 std::vector<std::vector<StampedPose>> GenerateTrajectoriesFromYaml(const YAML::Node& node,
                                                                    const std::string& source,
                                                                    const SimScene* scene) {
-  const SimYamlReader r(source);
+  const StrictYamlReader r(source);
   r.CheckMap(node, "trajectory");
   const std::string type = r.String(r.Require(node, "type", "trajectory"), "trajectory.type");
   if (type == "arm_sweep") return {GenerateArmSweep(ParseArmSweepOptions(node, source, true))};

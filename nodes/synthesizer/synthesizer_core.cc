@@ -26,7 +26,7 @@ int64_t WallNowNs() {
 }
 
 /// The image checks a synthesizer's output must pass before it is put on the wire.
-void CheckView(const model::View& v, const std::string& name) {
+void CheckView(const scene::RgbdSample& v, const std::string& name) {
   if (v.rgb.empty() || v.rgb.type() != CV_8UC3 || v.depth.empty() || v.depth.type() != CV_32FC1 ||
       v.rgb.size() != v.depth.size()) {
     throw std::runtime_error("synthesizer '" + name +
@@ -231,14 +231,14 @@ std::vector<SynthesizerCore::Rendered> SynthesizerCore::RenderWith(
     const size_t end = std::min(poses.size(), begin + static_cast<size_t>(options_.max_batch));
     std::vector<scene::Pose> chunk(poses.begin() + begin, poses.begin() + end);
     const Clock::time_point start = Clock::now();
-    std::vector<model::View> views = loaded->synth->RenderBatch(chunk);
+    std::vector<scene::RgbdSample> views = loaded->synth->RenderBatch(chunk);
     const Clock::time_point stop = Clock::now();
     if (views.size() != chunk.size()) {
       throw std::runtime_error("synthesizer '" + name + "' returned " +
                                std::to_string(views.size()) + " views for " +
                                std::to_string(chunk.size()) + " poses");
     }
-    for (model::View& v : views) {
+    for (scene::RgbdSample& v : views) {
       CheckView(v, name);
       Rendered r;
       r.view = std::move(v);

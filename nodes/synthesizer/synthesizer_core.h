@@ -121,7 +121,7 @@ class SynthesizerCore {
   };
   /// One rendered view before encoding.
   struct Rendered {
-    model::View view;
+    scene::RgbdSample view;
     double queue_ms = 0.0;
     double render_ms = 0.0;
   };

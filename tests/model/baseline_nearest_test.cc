@@ -43,7 +43,7 @@ TEST_CASE("NearestKeyframe returns the exact frame at a training pose", "[unit]"
   const auto data = Dataset();
   NearestKeyframe nk(data);
   for (size_t i = 0; i < data.frames.size(); ++i) {
-    const View v = nk.Render(data.frames[i].pose);
+    const p2i::scene::RgbdSample v = nk.Render(data.frames[i].pose);
     CHECK(nk.NearestIndex(data.frames[i].pose) == i);
     CHECK(SameImage(v.rgb, data.frames[i].rgb));
     CHECK(SameImage(v.depth, data.frames[i].depth));
@@ -51,7 +51,7 @@ TEST_CASE("NearestKeyframe returns the exact frame at a training pose", "[unit]"
     CHECK(v.pose.equals(data.frames[i].pose));
   }
   // A deep copy: changing the returned view leaves the training frame intact.
-  View v = nk.Render(data.frames[0].pose);
+  p2i::scene::RgbdSample v = nk.Render(data.frames[0].pose);
   v.rgb.setTo(cv::Scalar::all(0));
   CHECK(nk.Render(data.frames[0].pose).rgb.at<cv::Vec3b>(0, 0)[0] == 10);
   CHECK(nk.Camera().image_width == 8);

@@ -64,7 +64,7 @@ TEST_CASE("DepthWarp into a frame's own pose reproduces it", "[unit]") {
   DepthWarpOptions opt;
   opt.k = 1;
   DepthWarp warp(data, opt);
-  const View v = warp.Render(pose);
+  const p2i::scene::RgbdSample v = warp.Render(pose);
   REQUIRE(v.rgb.size() == cv::Size(kW, kH));
   // Zero or NaN (built by hand: cv::compare's treatment of NaN is not something to rely on).
   cv::Mat invalid = cv::Mat::zeros(kH, kW, CV_8UC1);
@@ -92,7 +92,7 @@ TEST_CASE("DepthWarp shifts a fronto-parallel plane by fx * t / z pixels", "[uni
   data.frames.push_back(Frame(Pose::Identity(), rgb, cv::Mat(kH, kW, CV_32FC1, cv::Scalar(z)), "p"));
   DepthWarp warp(data);
   // Camera moved to +x: the scene moves left in the image by `shift` pixels.
-  const View v = warp.Render(Translated(t, 0.0, 0.0));
+  const p2i::scene::RgbdSample v = warp.Render(Translated(t, 0.0, 0.0));
   const cv::Rect kept(0, 0, kW - shift, kH);
   CHECK(cv::norm(v.rgb(kept), rgb(cv::Rect(shift, 0, kW - shift, kH)), cv::NORM_INF) == 0.0);
   CHECK(cv::norm(v.depth(kept), cv::Mat(kH, kW - shift, CV_32FC1, cv::Scalar(z)), cv::NORM_INF) <
@@ -103,7 +103,7 @@ TEST_CASE("DepthWarp shifts a fronto-parallel plane by fx * t / z pixels", "[uni
   CHECK(cv::norm(v.rgb(strip), cv::NORM_INF) == 0.0);
   CHECK(warp.LastHoleFraction() == Approx(static_cast<double>(shift) / kW));
   // Moving the camera down (+y) shifts the image up by the same rule.
-  const View vy = warp.Render(Translated(0.0, t, 0.0));
+  const p2i::scene::RgbdSample vy = warp.Render(Translated(0.0, t, 0.0));
   CHECK(cv::norm(vy.rgb(cv::Rect(0, 0, kW, kH - shift)), rgb(cv::Rect(0, shift, kW, kH - shift)),
                  cv::NORM_INF) == 0.0);
 }
@@ -117,7 +117,7 @@ TEST_CASE("DepthWarp hole fill closes the holes", "[unit]") {
   DepthWarpOptions opt;
   opt.fill_holes = true;
   DepthWarp warp(data, opt);
-  const View v = warp.Render(Translated(0.2, 0.0, 0.0));
+  const p2i::scene::RgbdSample v = warp.Render(Translated(0.2, 0.0, 0.0));
   CHECK(warp.LastHoleFraction() > 0.05);  // there were holes before filling
   CHECK(cv::countNonZero(v.depth == 0.0f) == 0);
   const cv::Rect strip(kW - 5, 0, 5, kH);
@@ -151,7 +151,7 @@ TEST_CASE("DepthWarp blends the k nearest frames and renders at a requested came
   w1.Render(Translated(0.2, 0, 0));
   const double holes_one = w1.LastHoleFraction();
   DepthWarp w2(data);  // k = 4 > 2 frames: both used
-  const View v = w2.Render(Translated(0.2, 0, 0));
+  const p2i::scene::RgbdSample v = w2.Render(Translated(0.2, 0, 0));
   CHECK(holes_one > 0.0);
   CHECK(w2.LastHoleFraction() == 0.0);
   // Consistent sources blend to the same texture: columns [5, kW + 5) of the world.
@@ -160,7 +160,7 @@ TEST_CASE("DepthWarp blends the k nearest frames and renders at a requested came
   const auto half = p2i::scene::CameraInfo::Pinhole(kW / 2, kH / 2, kF / 2, kF / 2,
                                                     (kW / 2 - 1) / 2.0, (kH / 2 - 1) / 2.0);
   DepthWarp wh(data, DepthWarpOptions{}, half);
-  const View vh = wh.Render(Pose::Identity());
+  const p2i::scene::RgbdSample vh = wh.Render(Pose::Identity());
   CHECK(vh.rgb.size() == cv::Size(kW / 2, kH / 2));
   CHECK(wh.Camera().image_width == kW / 2);
   CHECK(cv::countNonZero(vh.depth) > kW * kH / 8);

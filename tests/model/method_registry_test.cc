@@ -55,11 +55,11 @@ TEST_CASE("Configure checks options at start-up; factories build from frames", "
   in.training = training;
 
   auto nearest = GetMethod("nearest").configure(YAML::Node(), "test")(in);
-  const View n = nearest->Render(training->frames[2].pose);
+  const scene::RgbdSample n = nearest->Render(training->frames[2].pose);
   CHECK(cv::norm(n.rgb, training->frames[2].rgb, cv::NORM_L1) == 0.0);
 
   auto warp = GetMethod("warp").configure(YAML::Load("{k: 2}"), "test")(in);
-  const View w = warp->Render(training->frames[2].pose);
+  const scene::RgbdSample w = warp->Render(training->frames[2].pose);
   CHECK(w.rgb.size() == cv::Size(24, 18));
 
   CHECK_THROWS_WITH(GetMethod("warp").configure(YAML::Load("{kk: 2}"), "bench.yaml"),

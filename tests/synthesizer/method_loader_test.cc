@@ -28,11 +28,11 @@ TEST_CASE("Built-in training data and the nearest/warp loaders", "[unit]") {
   REQUIRE(training->frames[0].depth.rows == 24);
 
   auto nearest = MakeLoader("nearest", {}, training)({0, "", "nearest"});
-  const model::View n = nearest->Render(training->frames[3].pose);
+  const scene::RgbdSample n = nearest->Render(training->frames[3].pose);
   CHECK(cv::norm(n.rgb, training->frames[3].rgb, cv::NORM_L1) == 0.0);  // the keyframe itself
 
   auto warp = MakeLoader("warp", {}, training)({0, "", "warp"});
-  const model::View w = warp->Render(training->frames[3].pose);
+  const scene::RgbdSample w = warp->Render(training->frames[3].pose);
   CHECK(w.rgb.cols == 32);
   CHECK(w.depth.rows == 24);
   CHECK(cv::countNonZero(w.depth > 0.0f) > 32 * 24 / 2);

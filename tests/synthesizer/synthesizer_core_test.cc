@@ -38,10 +38,10 @@ class FakeSynthesizer : public model::ViewSynthesizer {
   scene::CameraInfo Camera() const override {
     return scene::CameraInfo::Pinhole(kW, kH, 5, 5, 3.5, 2.5);
   }
-  model::View Render(const scene::Pose& pose) override {
+  scene::RgbdSample Render(const scene::Pose& pose) override {
     if (fail_) throw std::runtime_error("fake render failure");
     if (render_time_.count() > 0) std::this_thread::sleep_for(render_time_);
-    model::View v;
+    scene::RgbdSample v;
     v.pose = pose;
     v.rgb = cv::Mat(kH, kW, CV_8UC3, cv::Scalar(static_cast<double>(version_ % 256), 10, 20));
     v.depth = cv::Mat(kH, kW, CV_32FC1, cv::Scalar(pose.translation().x() + 1.0));

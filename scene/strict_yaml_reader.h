@@ -1,6 +1,6 @@
-/// @file sim_yaml_reader.h
-/// @brief Strict YAML value reading for scene and trajectory options: every problem becomes an
-/// exception naming the source, the line and the key.
+/// @file strict_yaml_reader.h
+/// @brief The project's strict YAML reader (scene and trajectory options, method options, bench
+/// configs): unknown keys and bad values become exceptions naming the source, line and key.
 #pragma once
 
 #include <yaml-cpp/yaml.h>
@@ -16,9 +16,9 @@ namespace p2i::scene {
 
 /// Reads values from YAML nodes; every problem throws std::runtime_error "SOURCE:LINE: what".
 /// Stateless apart from the source name: thread-compatible.
-class SimYamlReader {
+class StrictYamlReader {
  public:
-  explicit SimYamlReader(std::string source) : source_(std::move(source)) {}
+  explicit StrictYamlReader(std::string source) : source_(std::move(source)) {}
 
   [[noreturn]] void Fail(const YAML::Node& node, const std::string& what) const {
     std::ostringstream os;
