@@ -108,25 +108,11 @@ BenchConfig BenchConfig::FromYamlFile(const std::string& path) {
   return FromYamlString(ss.str(), path);
 }
 
-BenchConfig BenchConfig::FromYamlString(const std::string& text, const std::string& source) {
-  BenchConfig c;
-  c.source = source;
-  c.text = text;
-  const Reader r(source);
-  YAML::Node root;
-  try {
-    root = YAML::Load(text);
-  } catch (const YAML::Exception& e) {
-    throw std::runtime_error(source + ": YAML error: " + e.what());
-  }
-  r.CheckKeys(root,
-              {"dataset", "settings", "period", "split_b", "split_c", "max_test_views", "methods",
-               "sizes", "seeds", "threads", "lpips_weights", "strip_views", "stability",
-               "auto_size"},
-              "the bench config");
-  const std::string config_dir = fs::path(source).parent_path().string();
+namespace {
 
-  // --- dataset ---
+// dataset: a sim scene or a dataset folder (exactly one), and how frames are taken.
+void ReadDataset(const Reader& r, const YAML::Node& root, const std::string& config_dir,
+                 BenchConfig& c) {
   const YAML::Node ds = r.Require(root, "dataset", "the bench config");
   r.CheckKeys(ds,
               {"scene", "path", "format", "seven_scenes_invalid_depth", "trajectories",
@@ -154,10 +140,12 @@ BenchConfig BenchConfig::FromYamlString(const std::string& text, const std::stri
   if (ds["max_frames"]) d.max_frames = Int(r, ds["max_frames"], "dataset.max_frames", 0);
   if (ds["frame_step"]) d.frame_step = Int(r, ds["frame_step"], "dataset.frame_step", 1);
   if (ds["render_size"]) d.render_size = Int(r, ds["render_size"], "dataset.render_size", 16);
-  if (ds["sensor"]) d.sensor = scene::SimSensorOptions::FromYaml(ds["sensor"], source);
+  if (ds["sensor"]) d.sensor = scene::SimSensorOptions::FromYaml(ds["sensor"], c.source);
   if (ds["specular"]) d.specular = Bool(r, ds["specular"], "dataset.specular");
+}
 
-  // --- settings ---
+// settings (parsed once into scene::EvalSetting), period, split_b / split_c, max_test_views.
+void ReadSettings(const Reader& r, const YAML::Node& root, BenchConfig& c) {
   c.settings = Settings(r, r.Require(root, "settings", "the bench config"), "settings");
   if (root["period"]) c.period = Int(r, root["period"], "period", 2);
   for (const auto& s : c.settings)
@@ -177,8 +165,10 @@ BenchConfig BenchConfig::FromYamlString(const std::string& text, const std::stri
     c.c_test = Strings(r, r.Require(cc, "test", "split_c"), "split_c.test");
   }
   if (root["max_test_views"]) c.max_test_views = Int(r, root["max_test_views"], "max_test_views", 1);
+}
 
-  // --- sizes ---
+// sizes: the ladder (a resolution, or a map with model overrides and settings).
+void ReadSizes(const Reader& r, const YAML::Node& root, BenchConfig& c) {
   const YAML::Node sizes = r.Require(root, "sizes", "the bench config");
   if (!sizes.IsSequence() || sizes.size() == 0) r.Fail(sizes, "sizes must be a non-empty list");
   std::set<std::string> size_names;
@@ -203,8 +193,10 @@ BenchConfig BenchConfig::FromYamlString(const std::string& text, const std::stri
     if (!size_names.insert(size.name).second) r.Fail(s, "size name '" + size.name + "' repeats");
     c.sizes.push_back(size);
   }
+}
 
-  // --- seeds, threads, misc ---
+// seeds, threads, lpips_weights, strip_views.
+void ReadRunOptions(const Reader& r, const YAML::Node& root, BenchConfig& c) {
   if (root["seeds"]) {
     c.seeds.clear();
     if (!root["seeds"].IsSequence() || root["seeds"].size() == 0)
@@ -214,8 +206,11 @@ BenchConfig BenchConfig::FromYamlString(const std::string& text, const std::stri
   if (root["threads"]) c.threads = Int(r, root["threads"], "threads", 1);
   if (root["lpips_weights"]) c.lpips_weights = r.String(root["lpips_weights"], "lpips_weights");
   if (root["strip_views"]) c.strip_views = Int(r, root["strip_views"], "strip_views", 0);
+}
 
-  // --- methods ---
+// methods: each a name of the method registry with its common, training and own keys.
+void ReadMethods(const Reader& r, const YAML::Node& root, const std::string& config_dir,
+                 BenchConfig& c) {
   const YAML::Node methods = r.Require(root, "methods", "the bench config");
   if (!methods.IsSequence() || methods.size() == 0)
     r.Fail(methods, "methods must be a non-empty list");
@@ -266,7 +261,7 @@ BenchConfig BenchConfig::FromYamlString(const std::string& text, const std::stri
       e << options;
       spec.options_yaml = e.c_str();
     }
-    spec.make = info->configure(options, source + " (method '" + spec.name + "')");
+    spec.make = info->configure(options, c.source + " (method '" + spec.name + "')");
     if (spec.IsLearned()) {
       if (spec.preset.empty()) spec.preset = info->default_preset;
       try {
@@ -278,8 +273,10 @@ BenchConfig BenchConfig::FromYamlString(const std::string& text, const std::stri
     if (!names.insert(spec.name).second) r.Fail(m, "method name '" + spec.name + "' repeats");
     c.methods.push_back(spec);
   }
+}
 
-  // --- stability ---
+// stability: the sweep and the (setting, size) whose models it probes (default: the first).
+void ReadStability(const Reader& r, const YAML::Node& root, BenchConfig& c) {
   if (root["stability"]) {
     const YAML::Node s = root["stability"];
     r.CheckKeys(s, {"enabled", "translations_m", "rotations_deg", "poses", "threshold_db",
@@ -303,8 +300,10 @@ BenchConfig BenchConfig::FromYamlString(const std::string& text, const std::stri
            "stability.setting '" + c.stability.setting.Name() + "' is not in settings");
   if (!c.FindSize(c.stability.size))
     r.Fail(root["stability"], "stability.size '" + c.stability.size + "' is not in sizes");
+}
 
-  // --- auto_size ---
+// auto_size: the method (default: the first learned one), setting and margin.
+void ReadAutoSize(const Reader& r, const YAML::Node& root, BenchConfig& c) {
   if (root["auto_size"]) {
     const YAML::Node a = root["auto_size"];
     r.CheckKeys(a, {"method", "setting", "margin_db"}, "auto_size");
@@ -324,7 +323,12 @@ BenchConfig BenchConfig::FromYamlString(const std::string& text, const std::stri
                             : c.settings.front();
   if (!c.auto_size.method.empty() && !c.FindMethod(c.auto_size.method))
     r.Fail(root["auto_size"], "auto_size.method '" + c.auto_size.method + "' is not in methods");
+}
 
+// Names that refer to other entries (settings of sizes and methods, seed sizes) exist.
+void CheckReferences(const Reader& r, const YAML::Node& root, const BenchConfig& c) {
+  const YAML::Node sizes = root["sizes"];
+  const YAML::Node methods = root["methods"];
   for (const auto& s : c.sizes)
     for (const auto& x : s.settings)
       if (!Contains(c.settings, x))
@@ -340,7 +344,35 @@ BenchConfig BenchConfig::FromYamlString(const std::string& text, const std::stri
     for (const auto& x : m.seed_sizes)
       if (!c.FindSize(x))
         r.Fail(methods, "method '" + m.name + "' seed_sizes names '" + x + "' which is not in sizes");
+}
 
+}  // namespace
+
+BenchConfig BenchConfig::FromYamlString(const std::string& text, const std::string& source) {
+  BenchConfig c;
+  c.source = source;
+  c.text = text;
+  const Reader r(source);
+  YAML::Node root;
+  try {
+    root = YAML::Load(text);
+  } catch (const YAML::Exception& e) {
+    throw std::runtime_error(source + ": YAML error: " + e.what());
+  }
+  r.CheckKeys(root,
+              {"dataset", "settings", "period", "split_b", "split_c", "max_test_views", "methods",
+               "sizes", "seeds", "threads", "lpips_weights", "strip_views", "stability",
+               "auto_size"},
+              "the bench config");
+  const std::string config_dir = fs::path(source).parent_path().string();
+  ReadDataset(r, root, config_dir, c);
+  ReadSettings(r, root, c);
+  ReadSizes(r, root, c);
+  ReadRunOptions(r, root, c);
+  ReadMethods(r, root, config_dir, c);
+  ReadStability(r, root, c);
+  ReadAutoSize(r, root, c);
+  CheckReferences(r, root, c);
   // Build every learned model config now: a bad override stops the run at start-up.
   for (const auto& m : c.methods)
     if (m.IsLearned())

@@ -59,15 +59,21 @@ double MeanOver(const std::vector<ResultRow>& rows, const std::string& method,
   return ComputeSpread(v).mean;
 }
 
-ChartOutputs WriteCharts(const ChartInputs& in, const std::string& dir,
-                         const std::string& gnuplot_command) {
-  fs::create_directories(dir);
-  ChartOutputs out;
-  auto write = [&](const std::string& name, const std::string& text) {
-    scene::WriteFileAtomic((fs::path(dir) / name).string(), text);
-  };
+namespace {
 
-  // --- accuracy vs speed (primary setting, one point per method x size, mean over seeds) ---
+// Writes the chart files into one folder and records the chart stems.
+struct ChartWriter {
+  std::string dir;
+  ChartOutputs* out;
+  void Write(const std::string& name, const std::string& text) const {
+    scene::WriteFileAtomic((fs::path(dir) / name).string(), text);
+  }
+  void Add(const std::string& stem) const { out->charts.push_back(stem); }
+};
+
+// Accuracy vs speed on the primary setting: one point per method x size (mean over seeds), with
+// the Pareto front; PSNR always, LPIPS-Squeeze when any row has it. Returns whether one has.
+bool WriteAccuracySpeed(const ChartInputs& in, const ChartWriter& w) {
   struct Pt {
     std::string label;
     double speed, psnr, lpips;
@@ -90,7 +96,7 @@ ChartOutputs WriteCharts(const ChartInputs& in, const std::string& dir,
       dat << Q(p.label) << ' ' << V(p.speed) << ' ' << V(p.psnr) << ' ' << V(p.lpips) << '\n';
       any_lpips = any_lpips || std::isfinite(p.lpips);
     }
-    write("accuracy_speed.dat", dat.str());
+    w.Write("accuracy_speed.dat", dat.str());
     for (int which = 0; which < 2; ++which) {
       const bool psnr = which == 0;
       if (!psnr && !any_lpips) continue;
@@ -103,7 +109,7 @@ ChartOutputs WriteCharts(const ChartInputs& in, const std::string& dir,
          << ")\n";
       for (size_t i : front) fd << Q(pts[i].label) << ' ' << V(pp[i].x) << ' ' << V(pp[i].y) << '\n';
       const std::string stem = psnr ? "accuracy_vs_speed_psnr" : "accuracy_vs_speed_lpips";
-      write(stem + "_front.dat", fd.str());
+      w.Write(stem + "_front.dat", fd.str());
       const int col = psnr ? 3 : 4;
       std::ostringstream body;
       body << "set logscale x\nset xlabel 'views/s at batch 1 (log scale)'\nset ylabel '"
@@ -114,12 +120,16 @@ ChartOutputs WriteCharts(const ChartInputs& in, const std::string& dir,
            << "plot 'accuracy_speed.dat' using 2:" << col << " with points pt 7 ps 1.3 title 'method', \\\n"
            << "  'accuracy_speed.dat' using 2:" << col << ":1 with labels offset 0,1 notitle, \\\n"
            << "  '" << stem << "_front.dat' using 2:3 with linespoints dt 2 lw 2 pt 6 ps 2.5 title 'Pareto front'";
-      write(stem + ".gp", Script(stem, body.str()));
-      out.charts.push_back(stem);
+      w.Write(stem + ".gp", Script(stem, body.str()));
+      w.Add(stem);
     }
   }
 
-  // --- quality per setting (first size, mean over seeds), PSNR and (if any) LPIPS-Squeeze ---
+  return any_lpips;
+}
+
+// Quality per setting at the first size (mean over seeds): PSNR, and LPIPS-Squeeze if any.
+void WriteQualityPerSetting(const ChartInputs& in, bool any_lpips, const ChartWriter& w) {
   if (!in.sizes.empty()) {
     for (int which = 0; which < 2; ++which) {
       const bool psnr = which == 0;
@@ -135,19 +145,22 @@ ChartOutputs WriteCharts(const ChartInputs& in, const std::string& dir,
         dat << '\n';
       }
       const std::string stem = psnr ? "quality_per_setting_psnr" : "quality_per_setting_lpips";
-      write(stem + ".dat", dat.str());
+      w.Write(stem + ".dat", dat.str());
       std::ostringstream body;
       body << "set xlabel 'setting (a: N of 100 held out; b: adjacent trajectory; c: cross trajectory)'\n"
            << "set ylabel '" << (psnr ? "PSNR (dB)" : "LPIPS-Squeeze") << "'\nset title 'Quality per setting, size "
            << in.sizes.front() << " (mean over seeds)'\nset offsets 0.3, 0.3, 0, 0\n"
            << "plot for [i=2:" << in.methods.size() + 1 << "] '" << stem
            << ".dat' using i:xtic(1) with linespoints lw 2 pt 7 title columnheader(i)";
-      write(stem + ".gp", Script(stem, body.str()));
-      out.charts.push_back(stem);
+      w.Write(stem + ".gp", Script(stem, body.str()));
+      w.Add(stem);
     }
   }
 
-  // --- stability: PSNR vs offset from the training poses, per method ---
+}
+
+// Stability: PSNR against the offset from the training poses, per method and kind.
+void WriteStability(const ChartInputs& in, const ChartWriter& w) {
   for (const std::string kind : {"translation", "rotation"}) {
     std::vector<double> offsets;
     for (const auto& p : in.stability)
@@ -177,7 +190,7 @@ ChartOutputs WriteCharts(const ChartInputs& in, const std::string& dir,
       dat << '\n';
     }
     const std::string stem = "stability_" + kind;
-    write(stem + ".dat", dat.str());
+    w.Write(stem + ".dat", dat.str());
     std::ostringstream body;
     body << "set xlabel '" << (kind == "translation" ? "translation offset from a training pose (m)"
                                                      : "rotation offset from a training pose (deg)")
@@ -187,11 +200,14 @@ ChartOutputs WriteCharts(const ChartInputs& in, const std::string& dir,
          << "plot for [i=2:" << methods.size() + 1 << "] '" << stem
          << ".dat' using 1:i with linespoints lw 2 pt 7 title columnheader(i), " << V(in.threshold_db)
          << " with lines dt 3 lc 'black' title 'threshold'";
-    write(stem + ".gp", Script(stem, body.str()));
-    out.charts.push_back(stem);
+    w.Write(stem + ".gp", Script(stem, body.str()));
+    w.Add(stem);
   }
 
-  // --- size ladder: PSNR vs parameters for learned methods (when there are several sizes) ---
+}
+
+// Size ladder: PSNR against parameters of the learned methods (only with several sizes).
+void WriteLadder(const ChartInputs& in, const ChartWriter& w) {
   if (in.sizes.size() > 1) {
     std::vector<std::string> plots;
     for (const auto& m : in.methods) {
@@ -208,7 +224,7 @@ ChartOutputs WriteCharts(const ChartInputs& in, const std::string& dir,
       }
       if (n == 0) continue;
       const std::string file = "ladder_" + std::to_string(plots.size()) + ".dat";
-      write(file, dat.str());
+      w.Write(file, dat.str());
       plots.push_back("'" + file + "' using 2:3 with linespoints lw 2 pt 7 title '" + m + "', '" +
                       file + "' using 2:3:1 with labels offset 0,1 notitle");
     }
@@ -218,19 +234,22 @@ ChartOutputs WriteCharts(const ChartInputs& in, const std::string& dir,
            << "set offsets graph 0.1, graph 0.1, graph 0.1, graph 0.05\n"
            << "set title 'Model size ladder, setting " << in.primary_setting << "'\nplot ";
       for (size_t i = 0; i < plots.size(); ++i) body << (i ? ", \\\n  " : "") << plots[i];
-      write("ladder.gp", Script("ladder", body.str()));
-      out.charts.push_back("ladder");
+      w.Write("ladder.gp", Script("ladder", body.str()));
+      w.Add("ladder");
     }
   }
 
-  // --- run gnuplot ---
+}
+
+// Runs gnuplot on every chart script, or says how to once it is installed.
+void RunGnuplot(const std::string& dir, const std::string& gnuplot_command, ChartOutputs* out) {
   if (!HaveGnuplot(gnuplot_command)) {
-    out.note = "gnuplot not found: the charts' data (.dat) and scripts (.gp) are in " + dir +
+    out->note = "gnuplot not found: the charts' data (.dat) and scripts (.gp) are in " + dir +
                "; run `gnuplot NAME.gp` there once it is installed (Debian: gnuplot-nox)";
-    return out;
+    return;
   }
   bool all_ok = true;
-  for (const auto& stem : out.charts) {
+  for (const auto& stem : out->charts) {
     const std::string cmd = "cd '" + dir + "' && " + gnuplot_command + " '" + stem + ".gp' 2>'" +
                             stem + ".log'";
     const int rc = std::system(cmd.c_str());
@@ -238,8 +257,22 @@ ChartOutputs WriteCharts(const ChartInputs& in, const std::string& dir,
     if (ok) fs::remove(fs::path(dir) / (stem + ".log"));
     all_ok = all_ok && ok;
   }
-  out.gnuplot_ran = true;
-  if (!all_ok) out.note = "gnuplot failed on some charts: see the .log files in " + dir;
+  out->gnuplot_ran = true;
+  if (!all_ok) out->note = "gnuplot failed on some charts: see the .log files in " + dir;
+}
+
+}  // namespace
+
+ChartOutputs WriteCharts(const ChartInputs& in, const std::string& dir,
+                         const std::string& gnuplot_command) {
+  fs::create_directories(dir);
+  ChartOutputs out;
+  const ChartWriter w{dir, &out};
+  const bool any_lpips = WriteAccuracySpeed(in, w);
+  WriteQualityPerSetting(in, any_lpips, w);
+  WriteStability(in, w);
+  WriteLadder(in, w);
+  RunGnuplot(dir, gnuplot_command, &out);
   return out;
 }
 
