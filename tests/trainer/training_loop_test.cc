@@ -16,8 +16,8 @@ using namespace p2i::trainer;
 
 TEST_CASE("TrainingLoop: rounds on a growing buffer publish loadable, increasing versions",
           "[slow]") {
-  const std::string dir = testing::TempDir("loop");
-  const scene::RgbdDataset sim = testing::SimFrames(40);
+  const std::string dir = trainer::testing::TempDir("loop");
+  const scene::RgbdDataset sim = trainer::testing::SimFrames(40);
   REQUIRE(sim.frames.size() == 40);
 
   ReplayBuffer::Options bo;
@@ -30,7 +30,7 @@ TEST_CASE("TrainingLoop: rounds on a growing buffer publish loadable, increasing
   {
     ReplayBuffer buffer(bo);
     TrainingLoop::Options o;
-    o.config = testing::TinyConfig();
+    o.config = trainer::testing::TinyConfig();
     o.work_dir = dir + "/work";
     o.steps_per_round = 6;
     o.min_frames = 8;
@@ -84,7 +84,7 @@ TEST_CASE("TrainingLoop: rounds on a growing buffer publish loadable, increasing
   // A restarted loop continues the version numbers and the step count.
   {
     TrainingLoop::Options o;
-    o.config = testing::TinyConfig();
+    o.config = trainer::testing::TinyConfig();
     o.work_dir = dir + "/work";
     o.steps_per_round = 6;
     o.max_rounds = 1;
@@ -102,7 +102,7 @@ TEST_CASE("TrainingLoop: rounds on a growing buffer publish loadable, increasing
   // Warm start: a fresh work dir starting from version 3's checkpoint continues from its step.
   {
     TrainingLoop::Options o;
-    o.config = testing::TinyConfig();
+    o.config = trainer::testing::TinyConfig();
     o.work_dir = dir + "/warm";
     o.warm_start = versions[2].checkpoint_path();
     o.steps_per_round = 6;
