@@ -12,6 +12,7 @@
 
 #include "nodes/runtime/peer_registry.h"
 #include "tools/command.h"
+#include "tools/launch_cleanup.h"
 #include "tools/launch_machine.h"
 #include "tools/launch_command.h"
 #include "tools/launch_description.h"
@@ -146,9 +147,13 @@ int RunLaunch(const std::vector<std::string>& args) {
   }
 
   const std::string self_dir = SelfDir();
-  char params_template[] = "/tmp/p2i-launch-params-XXXXXX";
-  if (::mkdtemp(params_template) == nullptr) throw LaunchError("cannot create a folder in /tmp");
-  const std::string params_dir = params_template;
+  // Launches killed with SIGKILL could not clean up: remove their folders now.
+  if (!o.dry_run) {
+    for (const auto& dir : RemoveStaleLaunchDirs("/tmp/p2i-" + Uid()))
+      std::fprintf(stderr, "[launch] removed %s (left by a launcher that is no longer running)\n",
+                   dir.c_str());
+  }
+  const std::string params_dir = MakeLaunchParamsDir();
 
   std::vector<ProcessSpec> specs;
   std::string missing;
@@ -198,7 +203,7 @@ int RunLaunch(const std::vector<std::string>& args) {
     std::fprintf(stderr, "p2i launch: executables not found:\n%s(build them, or put them on "
                          "$PATH)\n", missing.c_str());
     if (!o.dry_run || !any_param_file) fs::remove_all(params_dir);
-    return 1;
+    return 2;  // a configuration error: nothing started
   }
   if (o.dry_run) {
     if (any_param_file) {

@@ -51,7 +51,10 @@ NodeCommand BuildNodeCommand(const NodeDescription& node, const std::string& exe
       cmd.argv.push_back("--params-file");
       cmd.argv.push_back(p.from_file);
     } else {
-      inline_text += p.name + ": " + p.value_yaml + "\n";
+      // "#@ FILE:LINE": the node names the launch file's line, not this temporary file, in
+      // its parameter errors (Parameters::LoadFile).
+      inline_text += p.name + ": " + p.value_yaml +
+                     (p.source.empty() ? "" : "  #@ " + p.source) + "\n";
     }
   }
   flush_inline();

@@ -32,6 +32,29 @@ std::string Where(const std::string& file, const YAML::Node& node) {
   throw LaunchError(Where(file, node) + ": " + (key.empty() ? "" : "key '" + key + "': ") + what);
 }
 
+// yaml-cpp keeps both entries of a duplicated key and `node[key]` returns one of them: the
+// other value would be silently ignored. Refuse it, naming both lines.
+void CheckDuplicateKeys(const std::string& file, const YAML::Node& node) {
+  if (node.IsMap()) {
+    std::map<std::string, YAML::Node> seen;
+    for (const auto& kv : node) {
+      if (kv.first.IsScalar()) {
+        const std::string key = kv.first.Scalar();
+        auto it = seen.find(key);
+        if (it != seen.end()) {
+          Fail(file, kv.first, key, "duplicate key (first at line " +
+                                        std::to_string(it->second.Mark().line + 1) +
+                                        "); remove one of them");
+        }
+        seen.emplace(key, kv.first);
+      }
+      CheckDuplicateKeys(file, kv.second);
+    }
+  } else if (node.IsSequence()) {
+    for (const auto& item : node) CheckDuplicateKeys(file, item);
+  }
+}
+
 std::string Join(const std::set<std::string>& words) {
   std::string out;
   for (const auto& w : words) out += (out.empty() ? "" : ", ") + w;
@@ -105,6 +128,7 @@ class Reader {
       throw LaunchError(file + ":" + std::to_string(e.mark.line + 1) + ": YAML syntax error: " +
                         e.msg);
     }
+    CheckDuplicateKeys(file, root);
     if (!root.IsMap() || !root["launch"]) {
       Fail(file, root, "launch", "a launch file is a map with one key `launch:` holding a list");
     }
@@ -270,6 +294,7 @@ class Reader {
       }
       for (const auto& p : params) {
         LaunchParam param;
+        param.source = Where(file, p);
         if (p.IsMap() && p["from"]) {
           CheckKeys(p, file, "param", {"from"});
           std::string path = Text(p, "from", scope, "param", true);

@@ -17,6 +17,7 @@ struct LaunchParam {
   std::string from_file;   ///< absolute path; non-empty for a `from:` entry
   std::string name;        ///< inline parameter name
   std::string value_yaml;  ///< inline value, YAML flow text (types inferred by the node)
+  std::string source;      ///< "FILE:LINE" of the entry (named by the node's errors)
   bool IsFile() const { return !from_file.empty(); }
 };
 

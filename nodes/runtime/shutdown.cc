@@ -44,6 +44,13 @@ void Shutdown::InstallSignalHandlers() {
   sa.sa_flags = SA_RESTART;
   sigaction(SIGINT, &sa, nullptr);
   sigaction(SIGTERM, &sa, nullptr);
+  // A node's stdout/stderr are often pipes to `p2i launch`; when the launcher dies, a write
+  // must fail with EPIPE (ignored by the logger) instead of killing the node before its
+  // OnShutdown() has flushed its files.
+  struct sigaction ignore {};
+  ignore.sa_handler = SIG_IGN;
+  sigemptyset(&ignore.sa_mask);
+  sigaction(SIGPIPE, &ignore, nullptr);
 }
 
 void Shutdown::Request() {

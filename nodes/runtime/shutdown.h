@@ -9,7 +9,8 @@ namespace p2i::runtime {
 /// The process-wide stop flag.
 ///
 /// InstallSignalHandlers() makes SIGINT and SIGTERM call Request() (async-signal-safe: an atomic
-/// store and a write() to a self-pipe). Loops either poll Requested(), include WakeFd() in their
+/// store and a write() to a self-pipe) and ignores SIGPIPE (a write to a dead launcher's pipe fails
+/// with EPIPE instead of killing the node). Loops either poll Requested(), include WakeFd() in their
 /// zmq_poll set (it becomes readable on a request), or block in WaitFor(). Thread-safe.
 class Shutdown {
  public:

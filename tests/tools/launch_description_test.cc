@@ -291,3 +291,28 @@ TEST_CASE("Launch helpers: shell words, namespaces, overrides", "[unit]") {
   CHECK(p2i::tools::ShellQuote("a b") == "'a b'");
   CHECK(p2i::tools::ShellQuote("--name") == "--name");
 }
+
+TEST_CASE("Launch: a key given twice in one map is an error naming both lines", "[unit]") {
+  const std::string text =
+      "launch:\n"
+      "- node:\n"
+      "    exec: camera\n"
+      "    name: cam\n"
+      "    exec: pose_source\n";
+  CHECK_THROWS_WITH(p2i::tools::LaunchDescriptionReader::ReadString(text, "/x/dup.yaml"),
+                    Catch::Contains("/x/dup.yaml:5") && Catch::Contains("key 'exec'") &&
+                        Catch::Contains("duplicate key (first at line 3)"));
+}
+
+TEST_CASE("Launch: inline parameter lines carry their launch file line", "[unit]") {
+  const std::string text =
+      "launch:\n"
+      "- node:\n"
+      "    exec: camera\n"
+      "    param:\n"
+      "    - {name: rate, value: 5}\n";
+  const auto d = p2i::tools::LaunchDescriptionReader::ReadString(text, "/x/l.yaml");
+  const auto cmd = p2i::tools::BuildNodeCommand(d.nodes.at(0), "/bin/p2i_camera", "/tmp/p", 0);
+  REQUIRE(cmd.param_files.size() == 1);
+  CHECK(cmd.param_files[0].second == "rate: 5  #@ /x/l.yaml:5\n");
+}

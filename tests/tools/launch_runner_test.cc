@@ -242,7 +242,7 @@ TEST_CASE("p2i launch exits non-zero when a node fails", "[integration]") {
         "missing.yaml",
         "launch:\n- node: {exec: fake_node, name: a, args: --lines 1}\n- node: {exec: nope_xyz}\n");
     Launcher launcher({file});
-    CHECK(launcher.Wait() == 1);
+    CHECK(launcher.Wait() == 2);  // configuration error (exit code rule, docs/RUNTIME.md)
     CHECK_THAT(launcher.err(), Catch::Contains("missing.yaml:3"));
     CHECK_THAT(launcher.err(), Catch::Contains("nope_xyz"));
     CHECK_THAT(launcher.out(), !Catch::Contains("[a] line 0"));
