@@ -29,7 +29,7 @@ std::vector<std::string> SplitCommas(const std::string& s) {
 Node::Node(const std::string& default_name, const NodeArgs& args)
     : args_(args),
       names_(args.node_namespace, args.name.empty() ? default_name : args.name, args.remaps),
-      params_(args),
+      params_(args, names_.NodeName(), names_.FullNodeName()),
       start_time_(std::chrono::steady_clock::now()) {
   Shutdown::InstallSignalHandlers();
   auto sink = std::make_shared<spdlog::sinks::stderr_color_sink_mt>();
@@ -38,14 +38,18 @@ Node::Node(const std::string& default_name, const NodeArgs& args)
   logger_->flush_on(spdlog::level::warn);
   CurveSecurity::SetLogger(logger_);  // refused peers appear in this node's log
 
-  const std::string level = Declare<std::string>(
-      "log_level", "info", "log level: trace, debug, info, warn, error");
-  const auto lvl = spdlog::level::from_str(level);
-  if (lvl == spdlog::level::off && level != "off") {
-    throw StartupError("parameter 'log_level': '" + level +
-                       "' is not one of trace, debug, info, warn, error, off");
-  }
-  logger_->set_level(lvl);
+  const auto parse_level = [](const std::string& level) {
+    const auto lvl = spdlog::level::from_str(level);
+    if (lvl == spdlog::level::off && level != "off") {
+      throw StartupError("parameter 'log_level': '" + level +
+                         "' is not one of trace, debug, info, warn, error, off");
+    }
+    return lvl;
+  };
+  const std::string level = DeclareDynamic<std::string>(
+      "log_level", "info", "log level: trace, debug, info, warn, error (dynamic)",
+      [this, parse_level](const std::string& l) { logger_->set_level(parse_level(l)); });
+  logger_->set_level(parse_level(level));
   status_period_s_ = Declare<double>("status_period", 1.0,
                                      "seconds between NodeStatus messages on ~/status (0 = off)");
   latch_period_s_ = Declare<double>("latch_period", 1.0,
@@ -64,7 +68,33 @@ Node::Node(const std::string& default_name, const NodeArgs& args)
 
 Node::~Node() { Close(); }
 
+const char* Version() { return P2I_VERSION; }
+
+void PrintNodeHelp(const std::string& executable, const std::string& parameters_help) {
+  std::printf(
+      "usage: %s [--name NAME] [--namespace NS] [--params-file FILE]... [-r FROM:=TO]...\n"
+      "       %*s [NAME:=VALUE]...   (ROS 2 spellings: --ros-args, -p NAME:=VALUE, --remap)\n"
+      "       %s --help | --version\n\n"
+      "Parameters (NAME:=VALUE on the command line, VALUE is YAML; or a --params-file, plain\n"
+      "or ROS 2 format):\n%s\n"
+      "Exit codes: 0 clean shutdown, 1 runtime error, 2 usage or configuration error.\n"
+      "See docs/RUNTIME.md.\n",
+      executable.c_str(), static_cast<int>(executable.size()), "", executable.c_str(),
+      parameters_help.c_str());
+}
+
+void Node::BeforeSideEffect() const {
+  if (args_.help) throw HelpRequested(params_.Help());
+}
+
+void Node::ParametersDone() {
+  BeforeSideEffect();
+  params_.CheckAllDeclared();
+}
+
 std::string Node::EndpointFor(const std::string& given, const std::string& resolved) const {
+  endpoint_names_used_.insert(given);
+  endpoint_names_used_.insert(resolved);
   auto it = endpoints_.find(resolved);
   if (it == endpoints_.end()) it = endpoints_.find(given);
   return it == endpoints_.end() ? "" : it->second;
@@ -73,6 +103,7 @@ std::string Node::EndpointFor(const std::string& given, const std::string& resol
 std::shared_ptr<RawPublisher> Node::AdvertiseRaw(const std::string& topic,
                                                  const std::string& type_name,
                                                  PublisherOptions options) {
+  BeforeSideEffect();
   const std::string resolved = Resolve(topic);
   if (options.endpoint.empty()) options.endpoint = EndpointFor(topic, resolved);
   auto pub = std::make_shared<RawPublisher>(resolved, type_name, FullName(), options);
@@ -84,6 +115,7 @@ std::shared_ptr<RawPublisher> Node::AdvertiseRaw(const std::string& topic,
 std::shared_ptr<RawSubscriber> Node::SubscribeRaw(const std::string& topic,
                                                   RawSubscriber::Handler handler,
                                                   SubscriberOptions options) {
+  BeforeSideEffect();
   const std::string resolved = Resolve(topic);
   if (options.endpoints.empty()) options.endpoints = SplitCommas(EndpointFor(topic, resolved));
   const bool discover = options.endpoints.empty() && !peers_.empty();
@@ -117,6 +149,7 @@ std::shared_ptr<RawServiceServer> Node::ServeRaw(const std::string& name,
                                                  const std::string& type_name,
                                                  RawServiceServer::Handler handler,
                                                  ServiceServerOptions options) {
+  BeforeSideEffect();
   const std::string resolved = Resolve(name);
   if (options.endpoint.empty()) options.endpoint = EndpointFor(name, resolved);
   auto pool = pools_.find(resolved);
@@ -145,13 +178,28 @@ std::shared_ptr<RawServiceServer> Node::ServeRaw(const std::string& name,
 
 void Node::Start() {
   if (started_) return;
-  started_ = true;
   params_.CheckAllDeclared();
+  started_ = true;
   if (status_period_s_ > 0) {
     status_pub_ = Advertise<msgs::pb::NodeStatus>("~/status");
     executor_.AddTimer(std::chrono::duration_cast<std::chrono::nanoseconds>(
                            std::chrono::duration<double>(status_period_s_)),
                        [this] { status_pub_->Publish(MakeStatus()); });
+  }
+  // An `endpoints` key that names none of this node's topics or services would be ignored:
+  // the topic then silently uses its default endpoint.
+  std::string unknown;
+  for (const auto& [key, ep] : endpoints_) {
+    if (endpoint_names_used_.count(key) == 0 && endpoint_names_used_.count(Resolve(key)) == 0)
+      unknown += (unknown.empty() ? "'" : ", '") + key + "'";
+  }
+  if (!unknown.empty()) {
+    std::string names;
+    for (const auto& n : endpoint_names_used_) {
+      if (!n.empty() && n[0] == '/') names += " " + n;
+    }
+    throw StartupError("parameter 'endpoints': " + unknown + " name(s) no topic or service of "
+                       "this node (its names:" + names + ")");
   }
   executor_.AddTimer(std::chrono::duration_cast<std::chrono::nanoseconds>(
                          std::chrono::duration<double>(latch_period_s_)),
@@ -160,6 +208,10 @@ void Node::Start() {
                          if (p->Options().latched) p->RepublishLatched();
                        }
                      });
+  param_service_ = std::make_unique<ParamService>(FullName(), &params_);
+  for (const auto& [name, setter] : dynamic_) param_service_->SetDynamic(name, setter);
+  param_service_->Publish();
+  executor_.AddTimer(std::chrono::milliseconds(250), [this] { param_service_->Poll(); });
   logger_->info("started (namespace {}, {} publishers, {} subscriptions, {} services)",
                 Namespace(), publishers_.size(), subscribers_.size(), servers_.size());
 }
@@ -195,6 +247,7 @@ void Node::Close() {
   subscribers_.clear();
   servers_.clear();
   status_pub_.reset();
+  param_service_.reset();
   publishers_.clear();  // sockets closed with linger 0 by their destructors (if not shared)
   logger_->flush();
 }
@@ -218,7 +271,11 @@ msgs::pb::NodeStatus Node::MakeStatus() const {
   auto& c = *s.mutable_counters();
   uint64_t published = 0, received = 0, dropped = 0, skipped = 0, malformed = 0,
            duplicates = 0, requests = 0, request_errors = 0;
-  for (const auto& p : publishers_) published += p->Stats().published.load();
+  uint64_t refused_subscriptions = 0;
+  for (const auto& p : publishers_) {
+    published += p->Stats().published.load();
+    refused_subscriptions += p->Stats().refused_subscriptions.load();
+  }
   for (const auto& sub : subscribers_) {
     const auto& st = sub->Stats();
     received += st.received.load();
@@ -240,6 +297,7 @@ msgs::pb::NodeStatus Node::MakeStatus() const {
   c["duplicates"] = duplicates;
   c["requests"] = requests;
   c["request_errors"] = request_errors;
+  c["refused_subscriptions"] = refused_subscriptions;
   const CurveStats& curve = CurveSecurity::Stats();  // process-wide (docs/SECURITY.md)
   if (curve.accepted.load() + curve.refused_key.load() + curve.refused_handshake.load() > 0) {
     c["curve_accepted"] = curve.accepted.load();

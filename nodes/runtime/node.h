@@ -7,6 +7,7 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -16,6 +17,7 @@
 #include "nodes/runtime/executor.h"
 #include "nodes/runtime/names.h"
 #include "nodes/runtime/node_args.h"
+#include "nodes/runtime/param_service.h"
 #include "nodes/runtime/parameters.h"
 #include "nodes/runtime/peer_registry.h"
 #include "nodes/runtime/publisher.h"
@@ -25,6 +27,17 @@
 #include "nodes/runtime/service_client.h"
 
 namespace p2i::runtime {
+
+/// Thrown under --help when the node is about to create something (ParametersDone(), or the
+/// first publisher, subscription, service, client or timer): what() is the parameter help.
+/// RunNode() prints it and exits 0, so `--help` never creates files or sockets.
+class HelpRequested : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// The p2i version (the CMake project version), for --version.
+const char* Version();
 
 /// The base of every node process.
 ///
@@ -62,10 +75,26 @@ class Node {
   /// Resolves a topic/service name under the namespace and applies remapping.
   std::string Resolve(const std::string& name) const { return names_.Resolve(name); }
 
+  /// Call once every parameter is declared (and the node's options validated), before creating
+  /// anything on disk or on the network: rejects supplied parameters nobody declared
+  /// (StartupError, exit 2) and, under --help, ends the construction (HelpRequested). Spin()
+  /// and Start() run the same check later for nodes that do not call it.
+  void ParametersDone();
+
   /// Declares a parameter (see Parameters::Declare).
   template <class T>
   T Declare(const std::string& name, const T& default_value, const std::string& description) {
     return params_.Declare<T>(name, default_value, description);
+  }
+  /// Declares a parameter that `p2i param set` may change while the node runs: `on_set` runs
+  /// on the executor thread with the new value (it may throw to refuse it; the error reaches
+  /// the caller). Returns the start-up value.
+  template <class T>
+  T DeclareDynamic(const std::string& name, const T& default_value, const std::string& description,
+                   std::function<void(const T&)> on_set) {
+    const T value = params_.Declare<T>(name, default_value, description);
+    dynamic_[name] = [on_set](const YAML::Node& v) { on_set(v.as<T>()); };
+    return value;
   }
 
   // ---- topics
@@ -142,6 +171,7 @@ class Node {
   template <class Req, class Rep>
   std::unique_ptr<ServiceClient<Req, Rep>> Client(const std::string& name,
                                                  ServiceClientOptions options = {}) {
+    BeforeSideEffect();
     const std::string resolved = Resolve(name);
     if (options.endpoint.empty()) options.endpoint = EndpointFor(name, resolved);
     if (options.endpoint.empty() && !peers_.empty() && !options.resolver) {
@@ -155,6 +185,7 @@ class Node {
 
   // ---- timers, loop
   int AddTimer(std::chrono::nanoseconds period, std::function<void()> cb) {
+    BeforeSideEffect();
     return executor_.AddTimer(period, std::move(cb));
   }
   Executor& GetExecutor() { return executor_; }
@@ -182,6 +213,8 @@ class Node {
   virtual void OnShutdown() {}
 
  private:
+  /// Under --help: throws HelpRequested (nothing may be created).
+  void BeforeSideEffect() const;
   std::string EndpointFor(const std::string& given, const std::string& resolved) const;
   void Close();
 
@@ -190,7 +223,10 @@ class Node {
   Parameters params_;
   std::shared_ptr<spdlog::logger> logger_;
   Executor executor_;
+  std::map<std::string, ParamService::Setter> dynamic_;
+  std::unique_ptr<ParamService> param_service_;
   std::map<std::string, std::string> endpoints_;
+  mutable std::set<std::string> endpoint_names_used_;  // given and resolved names looked up
   std::vector<std::string> peers_;        ///< $P2I_PEERS (multi-host launch)
   std::map<std::string, std::string> pools_;  ///< `pool` parameter: service -> broker backend
   std::unique_ptr<PeerWatcher> watcher_;  ///< finds remote publishers of subscribed topics
@@ -209,20 +245,53 @@ class Node {
   std::map<std::string, std::chrono::steady_clock::time_point> last_warn_;
 };
 
-/// Runs a node class with the standard exit codes: 0 after a clean shutdown, 2 for a start-up
-/// error (bad command line, unknown parameter), 1 for any other failure. NodeT must be
-/// constructible from (const NodeArgs&).
+/// Prints a node's --help: usage, its declared parameters (type, default, description) and
+/// the exit codes.
+void PrintNodeHelp(const std::string& executable, const std::string& parameters_help);
+
+/// Runs a node class with the standard exit codes (docs/RUNTIME.md): 0 after a clean shutdown
+/// (and for --help / --version), 2 for a usage or configuration error (bad command line,
+/// unknown or ill-typed parameter, a StartupError or std::invalid_argument thrown before the
+/// node runs, e.g. by its options' Validate()), 1 for any other failure (a runtime error).
+/// NodeT must be constructible from (const NodeArgs&).
 template <class NodeT>
 int RunNode(int argc, char** argv) {
+  std::string exe = argc > 0 ? argv[0] : "node";
+  if (exe.find('/') != std::string::npos) exe = exe.substr(exe.rfind('/') + 1);
+  NodeArgs args;
   try {
-    NodeT node(NodeArgs::Parse(argc, argv));
+    args = NodeArgs::Parse(argc, argv);
+  } catch (const StartupError& e) {
+    std::fprintf(stderr, "%s: usage error: %s\n", exe.c_str(), e.what());
+    return 2;
+  }
+  if (args.version) {
+    std::printf("%s %s\n", exe.c_str(), Version());
+    return 0;
+  }
+  bool running = false;
+  try {
+    NodeT node(args);
+    if (args.help) {
+      PrintNodeHelp(exe, node.Params().Help());
+      return 0;
+    }
+    node.Start();
+    running = true;
     node.Spin();
     return 0;
+  } catch (const HelpRequested& h) {
+    PrintNodeHelp(exe, h.what());
+    return 0;
   } catch (const StartupError& e) {
-    std::fprintf(stderr, "%s: start-up error: %s\n", argv[0], e.what());
+    std::fprintf(stderr, "%s: start-up error: %s\n", exe.c_str(), e.what());
     return 2;
+  } catch (const std::invalid_argument& e) {
+    std::fprintf(stderr, "%s: %s: %s\n", exe.c_str(),
+                 running ? "error" : "configuration error", e.what());
+    return running ? 1 : 2;
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "%s: error: %s\n", argv[0], e.what());
+    std::fprintf(stderr, "%s: error: %s\n", exe.c_str(), e.what());
     return 1;
   }
 }

@@ -46,12 +46,29 @@ NodeArgs NodeArgs::Parse(const std::vector<std::string>& args) {
         throw StartupError("command line: remapping '" + value + "' must be FROM:=TO");
       }
       out.remaps.emplace_back(value.substr(0, pos), value.substr(pos + 2));
+    } else if (take("-p")) {  // ROS 2: -p KEY:=VALUE
+      const auto pos = value.find(":=");
+      if (pos == std::string::npos || pos == 0)
+        throw StartupError("command line: '-p " + value + "' must be -p NAME:=VALUE");
+      out.overrides.emplace_back(value.substr(0, pos), value.substr(pos + 2));
+    } else if (a == "-h" || a == "--help") {
+      out.help = true;
+    } else if (a == "--version") {
+      out.version = true;
+    } else if (a == "--ros-args" || a == "--") {
+      // ROS 2 marks its arguments with --ros-args [...] --: accepted, nothing to do.
     } else if (a.find(":=") != std::string::npos && a.rfind("-", 0) != 0) {
       const auto pos = a.find(":=");
       if (pos == 0) throw StartupError("command line: override '" + a + "' has no key");
       out.overrides.emplace_back(a.substr(0, pos), a.substr(pos + 2));
     } else {
-      out.extra.push_back(a);
+      std::string hint;
+      const auto eq = a.find('=');
+      if (eq != std::string::npos && eq > 0 && a[0] != '-')
+        hint = " (did you mean " + a.substr(0, eq) + ":=" + a.substr(eq + 1) + "?)";
+      throw StartupError("command line: '" + a + "' is neither NAME:=VALUE nor one of --name, "
+                         "--namespace, --params-file, -r, -p, --help, --version" + hint +
+                         "; see --help");
     }
   }
   if (out.node_namespace.empty()) out.node_namespace = "/";

@@ -18,9 +18,21 @@ RawPublisher::RawPublisher(std::string resolved_topic, std::string type_name,
       topic_frame_(topic_ + std::string(1, '\0')),
       type_name_(std::move(type_name)),
       options_(std::move(options)),
-      socket_(ZmqContext(), zmq::socket_type::pub) {
+      socket_(ZmqContext(), zmq::socket_type::xpub) {
   endpoint_ = options_.endpoint.empty() ? DefaultEndpoint("topic", topic_) : options_.endpoint;
+  if (options_.bind) Registry::CheckEndpointFree(endpoint_, "publisher of topic '" + topic_ + "'");
+  OpenSocketLocked();
+  if (options_.bind) {
+    RegistryEntry entry{"topic", topic_, type_name_, endpoint_, node_name, 0, "", ""};
+    entry.remote_endpoint = host_endpoint_;
+    registry_path_ = Registry::Register(entry);
+  }
+}
+
+void RawPublisher::OpenSocketLocked() {
   socket_.set(zmq::sockopt::linger, 0);
+  socket_.set(zmq::sockopt::xpub_manual, true);
+  socket_.set(zmq::sockopt::maxmsgsize, options_.max_subscription_bytes);
   socket_.set(zmq::sockopt::sndhwm, options_.sndhwm);
   if (options_.kernel_buffer_bytes > 0) {
     socket_.set(zmq::sockopt::sndbuf, options_.kernel_buffer_bytes);
@@ -28,7 +40,6 @@ RawPublisher::RawPublisher(std::string resolved_topic, std::string type_name,
   CurveSecurity::Apply(socket_, endpoint_, options_.bind, "publisher of topic '" + topic_ + "'");
   try {
     if (options_.bind) {
-      Registry::CheckEndpointFree(endpoint_, "publisher of topic '" + topic_ + "'");
       socket_.bind(endpoint_);
       endpoint_ = socket_.get(zmq::sockopt::last_endpoint);
     } else {
@@ -40,13 +51,18 @@ RawPublisher::RawPublisher(std::string resolved_topic, std::string type_name,
                              e.what() + " (another publisher on this endpoint? set the "
                              "topic's endpoint parameter)");
   }
-  if (options_.bind) {
-    RegistryEntry entry{"topic", topic_, type_name_, endpoint_, node_name, 0, "", ""};
-    // Multi-host launch: a default endpoint is also bound on this host's address.
-    if (options_.endpoint.empty())
-      entry.remote_endpoint = BindHostEndpoint(socket_, "publisher of topic '" + topic_ + "'");
-    registry_path_ = Registry::Register(entry);
+  if (options_.bind && options_.endpoint.empty()) {
+    // Multi-host launch: a default endpoint is also bound on this host's address (the same
+    // port again when the socket is opened again after a flood).
+    const std::string what = "publisher of topic '" + topic_ + "'";
+    if (host_endpoint_.empty()) {
+      host_endpoint_ = BindHostEndpoint(socket_, what);
+    } else {
+      CurveSecurity::Apply(socket_, host_endpoint_, true, what);
+      socket_.bind(host_endpoint_);
+    }
   }
+  refused_since_open_ = 0;
 }
 
 RawPublisher::~RawPublisher() {
@@ -57,7 +73,42 @@ RawPublisher::~RawPublisher() {
 
 uint64_t RawPublisher::NextSeq() { return ++seq_; }
 
+void RawPublisher::ApplySubscriptionsLocked() {
+  // Bounded per call so a flood cannot stall publishing; the rest waits in the socket's queue
+  // (at most rcvhwm messages of at most max_subscription_bytes).
+  for (int i = 0; i < 1000; ++i) {
+    zmq::message_t msg;
+    if (!socket_.recv(msg, zmq::recv_flags::dontwait)) return;
+    const auto* data = static_cast<const char*>(msg.data());
+    const bool is_sub = msg.size() >= 1 && (data[0] == 0 || data[0] == 1);
+    const std::string filter = is_sub ? std::string(data + 1, msg.size() - 1) : std::string();
+    if (!is_sub || filter.size() > topic_frame_.size() ||
+        topic_frame_.compare(0, filter.size(), filter) != 0) {
+      stats_.refused_subscriptions.fetch_add(1, std::memory_order_relaxed);
+      if (++refused_since_open_ > options_.max_refused_subscriptions) {
+        // Drop every peer (and libzmq's copy of their filters): bind the same endpoint again.
+        socket_.close();
+        socket_ = zmq::socket_t(ZmqContext(), zmq::socket_type::xpub);
+        try {
+          OpenSocketLocked();
+        } catch (const std::exception&) {
+          // Not bound again: publishing goes nowhere rather than crashing; the counters show it.
+        }
+        return;
+      }
+      continue;
+    }
+    // In manual mode this applies to the pipe the message came from.
+    if (data[0] == 1) {
+      socket_.set(zmq::sockopt::subscribe, filter);
+    } else {
+      socket_.set(zmq::sockopt::unsubscribe, filter);
+    }
+  }
+}
+
 void RawPublisher::SendLocked(const msgs::WireMessage& m) {
+  ApplySubscriptionsLocked();
   socket_.send(zmq::buffer(topic_frame_), zmq::send_flags::sndmore);
   SendWire(socket_, m, zmq::send_flags::none);
   stats_.published.fetch_add(1, std::memory_order_relaxed);

@@ -26,12 +26,29 @@ struct PublisherOptions {
   int kernel_buffer_bytes = 4 << 20;
   bool latched = false;      ///< keep the last message and re-publish it (late joiners)
   double latch_period_s = 1.0;
+  /// ZMQ_MAXMSGSIZE of the socket: a publisher receives only subscriptions and the peers'
+  /// handshake commands (ZMTP READY, CURVE INITIATE: a few hundred bytes), so a peer sending a
+  /// larger frame is disconnected before ZeroMQ allocates it.
+  int64_t max_subscription_bytes = 1024;
+  /// Refused subscriptions after which the socket is re-bound (every peer is dropped; real
+  /// subscribers reconnect within ~100 ms and subscribe again): libzmq keeps every filter it
+  /// passes to us in an internal trie until that peer disconnects (~100 bytes per filter
+  /// byte), so this bounds it to ~64 KB of filters.
+  int64_t max_refused_subscriptions = 64;
 };
 
 /// Publishes WireMessages on one topic. The caller fills the header frame (including the u64
 /// sequence number: see Publisher<T>, which does it); this class prepends the topic frame, sends
 /// the blobs without copying, registers the topic for `p2i topic list` and keeps the last message
 /// when latched.
+///
+/// Subscription floods: the socket is an XPUB in manual mode (ZMQ_XPUB_MANUAL) with
+/// ZMQ_MAXMSGSIZE = max_subscription_bytes. Every subscription message is read by this class
+/// (before each send) and applied only when its filter is a prefix of the topic frame
+/// (`topic\0`, `top`, "" ...); any other filter is refused and counted. A plain PUB keeps every
+/// filter a peer sends in its trie (a 1 MB filter costs ~100 MB); here filters are at most
+/// max_subscription_bytes long and, past max_refused_subscriptions refused ones, the socket is
+/// re-bound, so memory stays bounded however many or long filters peers send.
 ///
 /// Thread-safety: the PUB socket is owned by this object; Publish() and RepublishLatched()
 /// serialise on an internal mutex (the mutex is the full memory barrier ZeroMQ requires when a
@@ -61,6 +78,10 @@ class RawPublisher {
 
  private:
   void SendLocked(const msgs::WireMessage& m);
+  void ApplySubscriptionsLocked();
+  void OpenSocketLocked();  // configures and binds/connects socket_
+  int64_t refused_since_open_ = 0;
+  std::string host_endpoint_;  // P2I_HOST_ADDRESS endpoint bound beside endpoint_, if any
 
   std::string topic_;
   std::string topic_frame_;  // topic + '\0'

@@ -21,6 +21,7 @@ RawSubscriber::RawSubscriber(std::string resolved_topic, SubscriberOptions optio
   endpoints_ = options_.endpoints;
   if (endpoints_.empty()) endpoints_.push_back(DefaultEndpoint("topic", topic_));
   socket_.set(zmq::sockopt::linger, 0);
+  socket_.set(zmq::sockopt::maxmsgsize, options_.max_message_bytes);
   socket_.set(zmq::sockopt::rcvhwm,
               options_.latest_only ? options_.latest_only_hwm : options_.rcvhwm);
   if (options_.kernel_buffer_bytes > 0 && !options_.latest_only) {

@@ -30,6 +30,9 @@ struct SubscriberOptions {
   /// Kernel receive buffer (SO_RCVBUF) in bytes; 0 = OS default (see PublisherOptions).
   /// Latest-only subscribers keep the OS default so little stale data waits in the kernel.
   int kernel_buffer_bytes = 4 << 20;
+  /// ZMQ_MAXMSGSIZE (per frame): a peer sending a larger frame is disconnected before ZeroMQ
+  /// allocates it (as for service servers).
+  int64_t max_message_bytes = 64 << 20;
 };
 
 /// Receives one topic.

@@ -17,6 +17,9 @@ struct TransportStats {
   std::atomic<uint64_t> skipped{0};      ///< discarded on purpose by latest-only draining
   std::atomic<uint64_t> duplicates{0};   ///< same seq again (latched re-publication)
   std::atomic<uint64_t> malformed{0};    ///< bad frames/headers/topic or failed decode
+  /// Publisher: subscription messages refused (a filter that is not a prefix of the topic
+  /// frame: it could only match other topics, so only its memory would be kept).
+  std::atomic<uint64_t> refused_subscriptions{0};
 };
 
 }  // namespace p2i::runtime
