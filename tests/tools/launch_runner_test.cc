@@ -160,8 +160,11 @@ TEST_CASE("p2i launch prefixes node output and passes the contract command line"
   CHECK_THAT(out, Catch::Contains("[alpha] line 2\n"));
   CHECK_THAT(out, !Catch::Contains("[alpha] line 3\n"));
   CHECK_THAT(out, Catch::Contains("[beta] line 0\n"));
-  CHECK_THAT(out, Catch::Contains("[alpha] param rate: 30\n"));
-  CHECK_THAT(out, Catch::Contains("[alpha] param size: [64, 64]\n"));
+  // Each inline parameter carries its launch file line (the node's errors name it).
+  CHECK_THAT(out, Catch::Contains("[alpha] param rate: 30  #@ "));
+  CHECK_THAT(out, Catch::Contains("two.yaml:9\n"));
+  CHECK_THAT(out, Catch::Contains("[alpha] param size: [64, 64]  #@ "));
+  CHECK_THAT(out, Catch::Contains("two.yaml:10\n"));
   CHECK_THAT(out, Catch::Contains("--name alpha --namespace /robot --params-file "));
   CHECK_THAT(out, Catch::Contains("-r rgbd:=/cam/rgbd --lines 3"));
   CHECK_THAT(launcher.err(), Catch::Contains("[alpha] done"));  // stderr is prefixed too
