@@ -33,6 +33,7 @@
 #include "model/lpips.h"
 #include "model/method_registry.h"
 #include "model/metrics.h"
+#include "model/pose_dependence.h"
 #include "model/trainer.h"
 #include "scene/capture.h"
 #include "scene/dataset_loader.h"
@@ -237,6 +238,7 @@ void Evaluate(model::ViewSynthesizer& method, const scene::RgbdDataset& test,
   double sum_abs_rel = 0, sum_sq = 0;
   int64_t valid = 0, gt_valid = 0;
   std::vector<double> psnr, ssim, lp, cov;
+  model::PoseDependence dependence;
   row->views.clear();
   for (const auto& gt : test.frames) {
     rec.Start();
@@ -249,6 +251,7 @@ void Evaluate(model::ViewSynthesizer& method, const scene::RgbdDataset& test,
     rec_view.id = gt.id;
     rec_view.psnr = model::Psnr(v.rgb, gt.rgb);
     rec_view.ssim = model::Ssim(v.rgb, gt.rgb);
+    dependence.Add(v.rgb, gt.rgb);
     rec_view.lpips = lpips ? lpips->Distance(v.rgb, gt.rgb) : std::nan("");
     rec_view.coverage = coverage.Score(gt.pose);
     if (!v.depth.empty()) {
@@ -279,6 +282,7 @@ void Evaluate(model::ViewSynthesizer& method, const scene::RgbdDataset& test,
   row->latency_p99_ms = lat.p99_ms;
   row->threads = threads;
   row->coverage_spearman = SpearmanRho(cov, psnr);
+  row->pose_dependence = dependence.Score();
   row->params = static_cast<double>(method.ParameterCount());
   row->flops_per_view = method.FlopsPerView();
 }
@@ -571,12 +575,14 @@ int RunBench(const BenchOptions& options) {
               store.Add(row);
               if (!quiet)
                 std::printf("[%zu/%zu] %s %s %s seed %d: PSNR %s dB, SSIM %s, LPIPS-Squeeze %s, "
-                            "AbsRel %s, %s views/s (p50 %s ms, p99 %s ms), train %s s\n",
+                            "AbsRel %s, pose-dependence %s, %s views/s (p50 %s ms, p99 %s ms), train %s s\n",
                             done, total, m.name.c_str(), setting.Name().c_str(), size.name.c_str(), seed,
                             Fixed(row.psnr).c_str(), Fixed(row.ssim, 3).c_str(),
                             Fixed(row.lpips, 3).c_str(), Fixed(row.depth_abs_rel, 3).c_str(),
-                            Fixed(row.views_per_s, 1).c_str(), Fixed(row.latency_p50_ms, 1).c_str(),
+                            Fixed(row.pose_dependence).c_str(), Fixed(row.views_per_s, 1).c_str(), Fixed(row.latency_p50_ms, 1).c_str(),
                             Fixed(row.latency_p99_ms, 1).c_str(), Fixed(row.train_s, 0).c_str());
+              const std::string warning = model::PoseDependenceWarning(row.pose_dependence);
+              if (!quiet && !warning.empty()) std::printf("  %s\n", warning.c_str());
               std::fflush(stdout);
             }
             if (want_strip) {

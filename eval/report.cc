@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "eval/stats.h"
+#include "model/pose_dependence.h"
 
 namespace p2i::eval {
 namespace {
@@ -70,11 +71,13 @@ std::string RenderReportMarkdown(const ReportInputs& in) {
      << "PSNR/SSIM on RGB in [0, 1]; LPIPS-Squeeze (SqueezeNet backbone, not comparable with "
         "LPIPS-Alex); depth AbsRel / RMSE over pixels valid in both, `valid` = predicted share of "
         "the measurable depth; speed at batch 1 with the stated threads; rho = Spearman "
-        "correlation of the coverage score with the per-view PSNR. Full figures: "
+        "correlation of the coverage score with the per-view PSNR; pose-dep = pose-dependence "
+        "(per-pixel std of the views over the test poses / that of the ground truth; below 0.5 "
+        "the method collapsed to one image, docs/EVALUATION.md). Full figures: "
         "[results.csv](results.csv), [results.json](results.json).\n\n";
   md << "| method | setting | size | seed | PSNR dB | SSIM | LPIPS-Sq | AbsRel | RMSE m | valid | "
-        "views/s | p50 ms | p99 ms | thr | train s | steps | params | GFLOP/view | rho |\n";
-  md << "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+        "views/s | p50 ms | p99 ms | thr | train s | steps | params | GFLOP/view | rho | pose-dep |\n";
+  md << "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   for (const auto& r : rows) {
     md << "| " << r.method << " | " << r.setting << " | " << r.size << " | " << r.seed << " | "
        << F(r.psnr) << " | " << F(r.ssim, "%.3f") << " | " << F(r.lpips, "%.3f") << " | "
@@ -87,7 +90,8 @@ std::string RenderReportMarkdown(const ReportInputs& in) {
                : "-")
        << " | " << (r.params > 0 ? F(r.params / 1e6, "%.2f") + " M" : "-") << " | "
        << (r.flops_per_view > 0 ? F(r.flops_per_view / 1e9, "%.3f") : "-") << " | "
-       << F(r.coverage_spearman) << " |\n";
+       << F(r.coverage_spearman) << " | " << F(r.pose_dependence)
+       << (r.pose_dependence < model::kPoseDependenceWarn ? " (collapsed)" : "") << " |\n";
   }
 
   // Seed spread (GAN stability).

@@ -48,7 +48,7 @@ std::string CsvHeader() {
   return "method,method_type,setting,size,resolution,seed,train_frames,test_views,psnr_db,ssim,"
          "lpips_squeeze,depth_abs_rel,depth_rmse_m,depth_valid_fraction,views_per_s,"
          "latency_p50_ms,latency_p99_ms,threads,train_s,train_steps_phase1,train_steps_phase2,"
-         "params,flops_per_view,coverage_spearman";
+         "params,flops_per_view,coverage_spearman,pose_dependence";
 }
 
 std::string CsvLine(const ResultRow& r) {
@@ -60,7 +60,7 @@ std::string CsvLine(const ResultRow& r) {
      << Num(r.views_per_s) << ',' << Num(r.latency_p50_ms) << ',' << Num(r.latency_p99_ms) << ','
      << r.threads << ',' << Num(r.train_s) << ',' << r.train_steps_phase1 << ','
      << r.train_steps_phase2 << ',' << Num(r.params, 10) << ',' << Num(r.flops_per_view, 10)
-     << ',' << Num(r.coverage_spearman);
+     << ',' << Num(r.coverage_spearman) << ',' << Num(r.pose_dependence);
   return os.str();
 }
 
@@ -97,6 +97,7 @@ std::string ResultsToJson(const std::vector<ResultRow>& rows, const std::string&
     j["params"] = J(r.params);
     j["flops_per_view"] = J(r.flops_per_view);
     j["coverage_spearman"] = J(r.coverage_spearman);
+    j["pose_dependence"] = J(r.pose_dependence);
     json views = json::array();
     for (const auto& v : r.views)
       views.push_back({{"id", v.id}, {"psnr_db", J(v.psnr)}, {"ssim", J(v.ssim)},
@@ -146,6 +147,7 @@ std::vector<ResultRow> ParseResultsJson(const std::string& text, std::string* co
       r.params = D(j, "params");
       r.flops_per_view = D(j, "flops_per_view");
       r.coverage_spearman = D(j, "coverage_spearman");
+      r.pose_dependence = j.contains("pose_dependence") ? D(j, "pose_dependence") : std::nan("");
       if (j.contains("views")) {
         for (const auto& v : j.at("views")) {
           ViewRecord rec;

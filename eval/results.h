@@ -39,6 +39,8 @@ struct ResultRow {
   double params = 0.0;          ///< parameters (0 for non-learned methods)
   double flops_per_view = 0.0;  ///< FLOPs per view, 2 x MACs (0 for non-learned methods)
   double coverage_spearman = 0.0;  ///< Spearman rho(coverage score, per-view PSNR)
+  /// model/pose_dependence.h over the test views (1 = varies like the scene, 0 = collapsed)
+  double pose_dependence = 0.0;
   std::vector<ViewRecord> views;
 
   /// "method|setting|size|seed": the identity used to resume.
