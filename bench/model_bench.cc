@@ -8,8 +8,14 @@
 /// a timing with the machine's speed at that moment (the shared box's load changes within
 /// minutes). The rate used is printed per row and written to the CSV.
 ///
+/// Each training step's time is printed beside its FLOP-limit time (the step's counted FLOPs /
+/// the measured matmul rate): `limit ms`. `--profile NAME` (a preset name, e.g. learn_128) then
+/// prints where one phase-1 step of that preset goes (G forward, D forward/backward on reals
+/// and fakes, Adam, and apart: self-attention and the spectral-norm power iterations).
+///
 /// usage: model_bench [--threads N] [--out results.csv] [--quick] [--infer-only] [--presets DIR]
-/// (--infer-only skips the training-step timings, reported as 0)
+///                    [--only NAME] [--profile NAME]
+/// (--infer-only skips the training-step timings, reported as 0; --only times one row)
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -82,15 +88,19 @@ int main(int argc, char** argv) {
   bool infer_only = false;
   std::string out = "model_bench.csv";
   std::string presets = std::string(P2I_SOURCE_DIR_BENCH) + "/model/presets";
+  std::string only, profile;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--threads" && i + 1 < argc) threads = std::atoi(argv[++i]);
     else if (a == "--out" && i + 1 < argc) out = argv[++i];
     else if (a == "--presets" && i + 1 < argc) presets = argv[++i];
+    else if (a == "--only" && i + 1 < argc) only = argv[++i];
+    else if (a == "--profile" && i + 1 < argc) profile = argv[++i];
     else if (a == "--quick") quick = true;
     else if (a == "--infer-only") infer_only = true;
     else {
-      std::fprintf(stderr, "usage: model_bench [--threads N] [--out CSV] [--quick] [--infer-only] [--presets DIR]\n");
+      std::fprintf(stderr, "usage: model_bench [--threads N] [--out CSV] [--quick] [--infer-only] "
+                           "[--presets DIR] [--only NAME] [--profile NAME]\n");
       return 1;
     }
   }
@@ -100,7 +110,25 @@ int main(int argc, char** argv) {
 
   std::vector<Row> rows;
   for (int r : {64, 128, 256}) rows.push_back({"ladder_" + std::to_string(r), Ladder(r)});
-  for (const std::string name : {"default", "default_256", "cnn_baseline"}) {
+  if (!profile.empty()) {
+    const auto config = model::P2iConfig::FromYamlFile(presets + "/" + profile + ".yaml");
+    const int steps = quick ? 3 : 8;
+    std::vector<double> rates;
+    model::StepProfile p;
+    const double rate = RateAround(threads, [&] { p = model::ProfileTrainingStep(config, steps, threads); });
+    const double flops = model::TrainingStepFlops(config, 1);
+    std::printf("phase-1 step of %s (%dx%d, batch %d) on %d threads, mean of %d steps:\n",
+                profile.c_str(), config.resolution, config.resolution, config.batch_size, threads,
+                steps);
+    for (const auto& [name, sec] : p.sections)
+      std::printf("  %-48s %9.1f ms %5.1f %%\n", name.c_str(), sec * 1e3,
+                  name.rfind("(apart)", 0) == 0 ? 0.0 : 100.0 * sec / p.total);
+    std::printf("  %-48s %9.1f ms; FLOP-limit %.1f ms (%.2f GFLOP at %.1f GF/s matmul): %.2fx\n",
+                "total", p.total * 1e3, flops / rate * 1e3, flops / 1e9, rate / 1e9,
+                p.total / (flops / rate));
+    return 0;
+  }
+  for (const std::string name : {"default", "default_256", "cnn_baseline", "learn_64", "learn_128"}) {
     const std::string path = presets + "/" + name + ".yaml";
     if (std::filesystem::exists(path)) rows.push_back({name, model::P2iConfig::FromYamlFile(path)});
   }
@@ -108,11 +136,12 @@ int main(int argc, char** argv) {
   std::ofstream csv(out);
   csv << "name,resolution,threads,params,gflops_per_view,p50_ms,p99_ms,views_per_s,"
          "infer_ratio_to_matmul,infer_matmul_gflops,train1_ms,train1_ratio,train1_matmul_gflops,"
-         "train2_ms,train2_ratio,train2_matmul_gflops\n";
-  std::printf("%-14s %5s %10s %8s %8s %8s %8s %6s %6s %10s %6s %6s %10s %6s %6s\n", "model", "res",
-              "params", "GFLOP/v", "p50 ms", "p99 ms", "views/s", "mmGF/s", "ratio", "train1 ms",
-              "mmGF/s", "ratio", "train2 ms", "mmGF/s", "ratio");
+         "train2_ms,train2_ratio,train2_matmul_gflops,train1_limit_ms,train2_limit_ms\n";
+  std::printf("%-14s %5s %10s %8s %8s %8s %8s %6s %6s %10s %9s %6s %6s %10s %9s %6s %6s\n", "model",
+              "res", "params", "GFLOP/v", "p50 ms", "p99 ms", "views/s", "mmGF/s", "ratio",
+              "train1 ms", "limit ms", "mmGF/s", "ratio", "train2 ms", "limit ms", "mmGF/s", "ratio");
   for (const auto& row : rows) {
+    if (!only.empty() && row.name != only) continue;
     model::WriteUntrainedCheckpoint(row.config, tmp.string());
     model::SynthesizerOptions so;
     so.threads = threads;
@@ -144,17 +173,18 @@ int main(int argc, char** argv) {
     const double f2 = model::TrainingStepFlops(row.config, 2);
     const double t1_ratio = rate1 > 0 ? t1 / (f1 / rate1) : 0.0;
     const double t2_ratio = rate2 > 0 && f2 > 0 ? t2 / (f2 / rate2) : 0.0;
-    std::printf("%-14s %5d %10lld %8.3f %8.2f %8.2f %8.1f %6.1f %6.2f %10.1f %6.1f %6.2f %10.1f %6.1f %6.2f\n",
+    const double limit1 = rate1 > 0 ? f1 / rate1 : 0.0, limit2 = rate2 > 0 ? f2 / rate2 : 0.0;
+    std::printf("%-14s %5d %10lld %8.3f %8.2f %8.2f %8.1f %6.1f %6.2f %10.1f %9.1f %6.1f %6.2f %10.1f %9.1f %6.1f %6.2f\n",
                 row.name.c_str(), row.config.resolution,
                 static_cast<long long>(synth->ParameterCount()), flops / 1e9, p50, p99, 1e3 / p50,
-                infer_rate / 1e9, infer_ratio, t1 * 1e3, rate1 / 1e9, t1_ratio, t2 * 1e3,
-                rate2 / 1e9, t2_ratio);
+                infer_rate / 1e9, infer_ratio, t1 * 1e3, limit1 * 1e3, rate1 / 1e9, t1_ratio,
+                t2 * 1e3, limit2 * 1e3, rate2 / 1e9, t2_ratio);
     std::fflush(stdout);
     csv << row.name << "," << row.config.resolution << "," << threads << ","
         << synth->ParameterCount() << "," << flops / 1e9 << "," << p50 << "," << p99 << ","
         << 1e3 / p50 << "," << infer_ratio << "," << infer_rate / 1e9 << "," << t1 * 1e3 << ","
         << t1_ratio << "," << rate1 / 1e9 << "," << t2 * 1e3 << "," << t2_ratio << ","
-        << rate2 / 1e9 << "\n";
+        << rate2 / 1e9 << "," << limit1 * 1e3 << "," << limit2 * 1e3 << "\n";
   }
   std::filesystem::remove(tmp);
   std::printf("wrote %s\n", out.c_str());
