@@ -14,6 +14,8 @@
 #include "convert/depth.h"
 #include "convert/image.h"
 #include "convert/pose.h"
+#include "model/baseline_warp.h"
+#include "model/coverage.h"
 #include "model/metrics.h"
 #include "scene/image_ops.h"
 #include "util/json_number.h"
@@ -61,8 +63,9 @@ MonitorNode::MonitorNode(const runtime::NodeArgs& args) : Node("monitor", args) 
   Log().info("{}", lpips_status_);
 
   views_sub_ = Subscribe<msgs::View>("views", [this](const msgs::View& v) { OnView(v); });
-  frames_sub_ = Subscribe<msgs::RgbdFrame>("rgbd", [this](const msgs::RgbdFrame&) {
+  frames_sub_ = Subscribe<msgs::RgbdFrame>("rgbd", [this](const msgs::RgbdFrame& f) {
     ++frames_captured_;
+    if (f.meta.has_pose()) keyframe_poses_.push_back(convert::FromMsg(f.meta.pose()));
   });
   versions_sub_ = Subscribe<msgs::pb::ModelVersion>(
       "model_version",
@@ -97,7 +100,48 @@ void MonitorNode::OnView(const msgs::View& view) {
   }
   const model::DepthErrors de = model::ComputeDepthErrors(depth, truth.depth);
   if (std::isfinite(de.abs_rel)) depth_absrel_.push_back(de.abs_rel);
+  ScoreBaselines(convert::FromMsg(view.meta.pose()), truth);
   ++views_scored_;
+}
+
+const scene::RgbdSample& MonitorNode::Keyframe(size_t i, int w, int h) {
+  if (w != keyframe_w_ || h != keyframe_h_) {
+    keyframe_cache_.clear();
+    keyframe_w_ = w;
+    keyframe_h_ = h;
+  }
+  auto it = keyframe_cache_.find(i);
+  if (it == keyframe_cache_.end()) {
+    scene::RgbdSample s = sim_->Render(keyframe_poses_[i], sim_camera_);
+    s.pose = keyframe_poses_[i];
+    s.id = "keyframe_" + std::to_string(i);
+    it = keyframe_cache_.emplace(i, scene::CenterCropResizeSample(s, w, h)).first;
+  }
+  return it->second;
+}
+
+void MonitorNode::ScoreBaselines(const scene::Pose& pose, const scene::RgbdSample& truth) {
+  if (keyframe_poses_.empty()) return;
+  constexpr double kMetresPerDegree = 0.5 * M_PI / 180.0;  // 0.5 m per radian
+  constexpr size_t kWarpFrames = 4;
+  std::vector<std::pair<double, size_t>> by_distance;
+  by_distance.reserve(keyframe_poses_.size());
+  for (size_t i = 0; i < keyframe_poses_.size(); ++i)
+    by_distance.push_back(
+        {model::CombinedPoseDistance(pose, keyframe_poses_[i], kMetresPerDegree), i});
+  const size_t k = std::min(kWarpFrames, by_distance.size());
+  std::partial_sort(by_distance.begin(), by_distance.begin() + k, by_distance.end());
+  const int w = truth.rgb.cols, h = truth.rgb.rows;
+  nearest_psnr_.push_back(model::Psnr(Keyframe(by_distance[0].second, w, h).rgb, truth.rgb));
+  scene::RgbdDataset sources;
+  sources.camera = scene::CenterCropResizeCamera(sim_camera_, w, h);
+  for (size_t j = 0; j < k; ++j) sources.frames.push_back(Keyframe(by_distance[j].second, w, h));
+  model::DepthWarpOptions o;
+  o.k = static_cast<int>(k);
+  o.metres_per_degree = kMetresPerDegree;
+  o.fill_holes = true;
+  model::DepthWarp warp(std::move(sources), o);
+  warp_psnr_.push_back(model::Psnr(warp.Render(pose).rgb, truth.rgb));
 }
 
 std::string MonitorNode::SummaryText() const {
@@ -116,7 +160,10 @@ std::string MonitorNode::SummaryText() const {
   std::snprintf(line, sizeof(line), "latency (queue+render) ms: p50 %.1f  p99 %.1f\n",
                 Median(latency_ms_), Percentile(latency_ms_, 99));
   os << line;
-  std::snprintf(line, sizeof(line), "PSNR dB (median):          %.2f\n", Median(psnr_));
+  std::snprintf(line, sizeof(line),
+                "PSNR dB (median):          %.2f   (same poses: nearest keyframe %.2f, depth "
+                "warp %.2f)\n",
+                Median(psnr_), Median(nearest_psnr_), Median(warp_psnr_));
   os << line;
   std::snprintf(line, sizeof(line), "SSIM (median):             %.3f\n", Median(ssim_));
   os << line;
@@ -158,6 +205,8 @@ void MonitorNode::Finish() {
     j["latency_ms_p50"] = NumberOrNull(Median(latency_ms_));
     j["latency_ms_p99"] = NumberOrNull(Percentile(latency_ms_, 99));
     j["psnr_db_median"] = NumberOrNull(Median(psnr_));
+    j["nearest_keyframe_psnr_db_median"] = NumberOrNull(Median(nearest_psnr_));
+    j["depth_warp_psnr_db_median"] = NumberOrNull(Median(warp_psnr_));
     j["ssim_median"] = NumberOrNull(Median(ssim_));
     j["lpips_squeeze_median"] = lpips_ ? NumberOrNull(Median(lpips_values_)) : nullptr;
     j["depth_absrel_median"] = NumberOrNull(Median(depth_absrel_));

@@ -8,6 +8,7 @@
 #include "convert/camera_info.h"
 #include "convert/rgbd_frame.h"
 #include "model/p2i_config.h"
+#include "model/pose_dependence.h"
 #include "nodes/runtime/endpoints.h"
 #include "scene/dataset_loader.h"
 
@@ -29,6 +30,9 @@ TrainerNode::TrainerNode(const runtime::NodeArgs& args) : Node("trainer", args) 
       Declare<double>("recent_fraction", 0.5, "share of the buffer kept as the recent window");
   const int min_frames = Declare<int>("min_frames", 8, "frames needed before training starts");
   const int steps = Declare<int>("publish_every_steps", 200, "training steps per round/version");
+  const int enet_steps = Declare<int>(
+      "enet_steps_per_version", -1,
+      "ENET steps per round after the G+D steps (-1 = publish_every_steps, 0 = train G only)");
   const int threads = Declare<int>("threads", 1, "torch threads for training");
   const int max_val = Declare<int>("max_val_frames", 8, "held-out frames for validation PSNR");
   const int max_rounds = Declare<int>("max_rounds", -1, "stop training after N rounds (-1 = never)");
@@ -82,6 +86,7 @@ TrainerNode::TrainerNode(const runtime::NodeArgs& args) : Node("trainer", args) 
   o.config = config;
   o.work_dir = work_dir;
   o.steps_per_round = steps;
+  o.enet_steps_per_round = enet_steps;
   o.threads = threads;
   o.warm_start = checkpoint;
   o.min_frames = static_cast<size_t>(std::max(2, min_frames));
@@ -94,8 +99,13 @@ TrainerNode::TrainerNode(const runtime::NodeArgs& args) : Node("trainer", args) 
         version_pub_->Publish(v);
         Count("versions_published");
         SetValue("val_psnr", v.val_psnr());
-        Log().info("model version {} (step {}, val PSNR {:.2f} dB): {}", v.version(), v.step(),
-                   v.val_psnr(), v.checkpoint_path());
+        // In this node's NodeStatus values (p2i topic echo /trainer/node_status).
+        const double pose_dependence = loop_->LastPoseDependence();
+        SetValue("val_pose_dependence", pose_dependence);
+        Log().info("model version {} (step {}, val PSNR {:.2f} dB, pose-dependence {:.2f}): {}",
+                   v.version(), v.step(), v.val_psnr(), pose_dependence, v.checkpoint_path());
+        if (pose_dependence >= 0 && pose_dependence < model::kPoseDependenceWarn)
+          Log().warn("{}", model::PoseDependenceWarning(pose_dependence));
       },
       [this](const msgs::pb::TrainerStatus& s) {
         if (!closing_) status_pub_->Publish(s);

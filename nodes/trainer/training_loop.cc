@@ -2,6 +2,7 @@
 /// @brief TrainingLoop: rounds of model::Trainer with resume on a buffer snapshot.
 #include "nodes/trainer/training_loop.h"
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -45,6 +46,8 @@ void TrainingLoop::Options::Validate() const {
   config.Validate();
   if (work_dir.empty()) throw std::invalid_argument("TrainingLoop: work_dir is empty");
   if (steps_per_round < 1) throw std::invalid_argument("TrainingLoop: steps_per_round must be >= 1");
+  if (enet_steps_per_round < -1)
+    throw std::invalid_argument("TrainingLoop: enet_steps_per_round must be >= -1 (-1 = steps_per_round)");
   if (threads < 1) throw std::invalid_argument("TrainingLoop: threads must be >= 1");
   if (min_frames < 2) throw std::invalid_argument("TrainingLoop: min_frames must be >= 2");
   if (val_every_nth < 2) throw std::invalid_argument("TrainingLoop: val_every_nth must be >= 2");
@@ -179,7 +182,12 @@ void TrainingLoop::Main() {
 
 void TrainingLoop::RunRounds() {
   const std::string ckpt = model::Trainer::CheckpointPath(options_.work_dir);
-  int step = 0;  // phase-1 step of the checkpoint
+  int step = 0;   // phase-1 step of the checkpoint
+  int step2 = 0;  // phase-2 (ENET) step of the checkpoint
+  const bool enet = options_.config.enet && !options_.config.IsBaseline() &&
+                    options_.enet_steps_per_round != 0;
+  const int enet_steps =
+      options_.enet_steps_per_round < 0 ? options_.steps_per_round : options_.enet_steps_per_round;
   bool know_step = !fs::exists(ckpt);  // else a 0-step run reads it from the checkpoint
   int rounds = 0;
   while (!stop_ && (options_.max_rounds < 0 || rounds < options_.max_rounds)) {
@@ -204,8 +212,9 @@ void TrainingLoop::RunRounds() {
     SetPhase("training");
     model::TrainerOptions t;
     t.out_dir = options_.work_dir;
-    t.phase = 1;
+    t.phase = enet ? 0 : 1;
     t.steps = know_step ? step + options_.steps_per_round : 0;
+    t.steps_phase2 = know_step ? step2 + enet_steps : 0;
     t.threads = options_.threads;
     t.resume = fs::exists(ckpt);
     t.progress = false;
@@ -228,11 +237,15 @@ void TrainingLoop::RunRounds() {
     if (!know_step) {
       // Resumed (restart / warm start): learn the checkpoint's step, nothing trained yet.
       step = report.phase1_steps;
+      step2 = report.phase2_steps;
       know_step = true;
       continue;
     }
     const int done = report.phase1_steps - step;
+    const double pose_dependence =
+        std::isfinite(report.val_pose_dependence) ? report.val_pose_dependence : -1.0;
     step = report.phase1_steps;
+    step2 = report.phase2_steps;
     ++rounds;
     ReadLosses();
     {
@@ -259,6 +272,7 @@ void TrainingLoop::RunRounds() {
     mv.set_step(static_cast<uint64_t>(step));
     mv.set_method("p2i_net");
     mv.set_val_psnr(report.val_psnr);
+    pose_dependence_ = pose_dependence;
     mv.set_width(static_cast<uint32_t>(options_.config.resolution));
     mv.set_height(static_cast<uint32_t>(options_.config.resolution));
     if (on_version_) on_version_(mv);

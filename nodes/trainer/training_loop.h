@@ -21,9 +21,9 @@ namespace p2i::trainer {
 /// Continuous training in rounds.
 ///
 /// Each round snapshots the buffer (every `val_every_nth` frame held out for validation once
-/// the buffer has at least 2 * val_every_nth frames), runs model::Trainer (phase 1 only: G and
-/// D; ENET is not trained online) with `resume` so weights, optimiser state and RNG carry over,
-/// up to `steps_per_round` more steps, then copies work_dir/checkpoint.pt atomically to
+/// the buffer has at least 2 * val_every_nth frames), runs model::Trainer (G and D for
+/// `steps_per_round` more steps, then ENET for `enet_steps_per_round` more steps with that G
+/// frozen) with `resume` so weights, optimiser state and RNG carry over, then copies work_dir/checkpoint.pt atomically to
 /// work_dir/versions/model_vNNNNNN.pt (after writing the round's training poses beside it,
 /// model_vNNNNNN.poses.txt, TUM format, atomically) and calls `on_version`. A status (`on_status`) is emitted
 /// when the phase changes and after each round. Versions continue after a restart (the highest
@@ -45,6 +45,10 @@ class TrainingLoop {
     model::P2iConfig config;
     std::string work_dir;
     int steps_per_round = 200;
+    /// ENET (phase-2) steps per round, after the round's G + D steps, on the round's G (so each
+    /// published version pairs G with an ENET trained on it); -1 = steps_per_round, 0 = G only.
+    /// Ignored when the config has no ENET.
+    int enet_steps_per_round = -1;
     int threads = 1;              ///< torch threads for training
     std::string warm_start;       ///< checkpoint to start from ("" = none)
     size_t min_frames = 8;        ///< the loop waits until the buffer holds this many
@@ -71,6 +75,9 @@ class TrainingLoop {
   std::string Error() const;
   msgs::pb::TrainerStatus LastStatus() const;
   uint64_t LastVersion() const { return version_; }
+  /// Pose-dependence score (model/pose_dependence.h) of the last published version's validation;
+  /// -1 before the first one (or without validation frames). Thread-safe.
+  double LastPoseDependence() const { return pose_dependence_; }
 
   static std::string VersionPath(const std::string& work_dir, uint64_t version);
   /// versions/model_vNNNNNN.poses.txt beside a version's checkpoint: the TUM poses of the frames
@@ -92,6 +99,7 @@ class TrainingLoop {
   std::atomic<bool> stop_{false};
   std::atomic<bool> finished_{false};
   std::atomic<uint64_t> version_{0};
+  std::atomic<double> pose_dependence_{-1.0};
   mutable std::mutex mutex_;
   std::condition_variable cv_;
   msgs::pb::TrainerStatus status_;
