@@ -2,7 +2,7 @@
 /// @brief Model checkpoints: one file holding the modules, the optimiser states, the CPU RNG
 /// state and a JSON metadata record (format version, config, pose normalisation, resolution,
 /// channels, steps, camera). Written atomically. An *inference* checkpoint (ExportInference in
-/// trainer.h) holds only the metadata, G and ENET. INTERNAL to model/ (includes LibTorch).
+/// export.h) holds only the metadata, G and ENET. INTERNAL to model/ (includes LibTorch).
 #pragma once
 
 #include <functional>

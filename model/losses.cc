@@ -66,6 +66,17 @@ EnetLossTerms EnetLoss(const torch::Tensor& enhanced, const torch::Tensor& real,
   return t;
 }
 
+torch::Tensor ReconstructionLoss(const torch::Tensor& generated, const torch::Tensor& real) {
+  return (generated - real).abs().mean();
+}
+
+torch::Tensor R1Penalty(const torch::Tensor& score_real, const torch::Tensor& real_images,
+                        double gamma) {
+  const auto grad = torch::autograd::grad({score_real.sum()}, {real_images}, {},
+                                          /*retain_graph=*/true, /*create_graph=*/true)[0];
+  return 0.5 * gamma * grad.pow(2).reshape({grad.size(0), -1}).sum(1).mean();
+}
+
 torch::Tensor RegressionLoss(const torch::Tensor& generated, const torch::Tensor& real) {
   return (generated - real).pow(2).mean();
 }

@@ -57,6 +57,14 @@ struct EnetLossTerms {
 EnetLossTerms EnetLoss(const torch::Tensor& enhanced, const torch::Tensor& real,
                        const LossWeights& w);
 
+/// pix2pix-style reconstruction term on G: mean |I_g - I_r| over all pixels and channels.
+torch::Tensor ReconstructionLoss(const torch::Tensor& generated, const torch::Tensor& real);
+
+/// R1 penalty: gamma / 2 * E_batch ||d score_real / d real_images||^2. `real_images` must have
+/// required grad before D ran on them; the result keeps the graph (create_graph) so it trains D.
+torch::Tensor R1Penalty(const torch::Tensor& score_real, const torch::Tensor& real_images,
+                        double gamma);
+
 /// The CNN baseline's plain L2 regression: mean squared error over all pixels and channels.
 torch::Tensor RegressionLoss(const torch::Tensor& generated, const torch::Tensor& real);
 

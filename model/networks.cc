@@ -116,8 +116,9 @@ torch::Tensor SelfAttentionImpl::forward(const torch::Tensor& x) {
 GeneratorImpl::GeneratorImpl(const P2iConfig& config)
     : widths_(config.GeneratorWidths()),
       channels_(config.Channels()),
-      pixel_norm_(config.g_norm == "pixel") {
-  fc1 = register_module("fc1", torch::nn::Linear(7, config.g_fc_width));
+      pixel_norm_(config.g_norm == "pixel"),
+      fourier_bands_(config.pose_encoding == "fourier" ? config.fourier_bands : 0) {
+  fc1 = register_module("fc1", torch::nn::Linear(config.PoseInputs(), config.g_fc_width));
   fc2 = register_module("fc2", torch::nn::Linear(config.g_fc_width, 16 * widths_[0]));
   convs = register_module("convs", torch::nn::ModuleList());
   convs->push_back(torch::nn::Conv2d(
@@ -130,8 +131,19 @@ GeneratorImpl::GeneratorImpl(const P2iConfig& config)
       torch::nn::Conv2d(torch::nn::Conv2dOptions(widths_.back(), channels_, 3).padding(1)));
 }
 
+torch::Tensor EncodePose(const torch::Tensor& pose, int bands) {
+  if (bands <= 0) return pose;
+  std::vector<torch::Tensor> parts{pose};
+  for (int k = 0; k < bands; ++k) {
+    const auto a = pose * (M_PI * std::pow(2.0, k));
+    parts.push_back(torch::sin(a));
+    parts.push_back(torch::cos(a));
+  }
+  return torch::cat(parts, 1);
+}
+
 torch::Tensor GeneratorImpl::forward(const torch::Tensor& pose) {
-  auto x = torch::relu(fc1->forward(pose));
+  auto x = torch::relu(fc1->forward(EncodePose(pose, fourier_bands_)));
   // PixelNorm: each pixel's feature vector to unit RMS (per sample; no batch statistics).
   const auto norm = [this](const torch::Tensor& t) {
     return pixel_norm_ ? t * torch::rsqrt(t.pow(2).mean(1, /*keepdim=*/true) + 1e-8) : t;
@@ -149,7 +161,7 @@ torch::Tensor GeneratorImpl::forward(const torch::Tensor& pose) {
 }
 
 double GeneratorImpl::MacsPerView() const {
-  double macs = 7.0 * fc1->options.out_features() +
+  double macs = static_cast<double>(fc1->options.in_features()) * fc1->options.out_features() +
                 static_cast<double>(fc1->options.out_features()) * fc2->options.out_features();
   for (size_t i = 0; i < widths_.size(); ++i) {
     const double side = 4.0 * std::pow(2.0, static_cast<double>(i));

@@ -79,8 +79,13 @@ class GeneratorImpl : public torch::nn::Module {
   std::vector<int> widths_;
   int channels_;
   bool pixel_norm_;
+  int fourier_bands_;  ///< 0 = the pose as is
 };
 TORCH_MODULE(Generator);
+
+/// G's pose input: `pose` (batch x 7) as is for bands = 0, else with its Fourier features
+/// [y, sin(2^k pi y), cos(2^k pi y)], k < bands (batch x 7 (1 + 2 bands)).
+torch::Tensor EncodePose(const torch::Tensor& pose, int bands);
 
 /// What D computes for one batch: the latent F_l and the mapped heads.
 struct DOutput {

@@ -67,6 +67,11 @@ void P2iConfig::Validate() const {
   if (d_steps < 1) fail("d_steps must be >= 1");
   if (!(g_ema >= 0 && g_ema < 1)) fail("g_ema must be in [0, 1) (0 = off)");
   if (g_norm != "none" && g_norm != "pixel") fail("g_norm must be none or pixel, got '" + g_norm + "'");
+  if (pose_encoding != "none" && pose_encoding != "fourier")
+    fail("pose_encoding must be none or fourier, got '" + pose_encoding + "'");
+  if (fourier_bands < 1 || fourier_bands > 16) fail("fourier_bands must be in [1, 16]");
+  if (!(recon_weight >= 0)) fail("recon_weight must be >= 0 (0 = off)");
+  if (!(r1_gamma >= 0)) fail("r1_gamma must be >= 0 (0 = off)");
   if (steps_phase1 < 0 || steps_phase2 < 0) fail("steps_phase1/2 must be >= 0");
   if (!(lr_g > 0 && lr_d > 0 && lr_enet > 0)) fail("learning rates must be > 0");
   if (!(beta1 >= 0 && beta1 < 1 && beta2 >= 0 && beta2 < 1)) fail("betas must be in [0, 1)");
@@ -97,6 +102,10 @@ P2iConfig P2iConfig::FromYamlString(const std::string& text, const std::string& 
       {"g_widths", [&](const YAML::Node& n) { c.g_widths = n.as<std::vector<int>>(); }},
       {"g_fc_width", [&](const YAML::Node& n) { c.g_fc_width = n.as<int>(); }},
       {"g_norm", [&](const YAML::Node& n) { c.g_norm = n.as<std::string>(); }},
+      {"pose_encoding", [&](const YAML::Node& n) { c.pose_encoding = n.as<std::string>(); }},
+      {"fourier_bands", [&](const YAML::Node& n) { c.fourier_bands = n.as<int>(); }},
+      {"recon_weight", [&](const YAML::Node& n) { c.recon_weight = n.as<double>(); }},
+      {"r1_gamma", [&](const YAML::Node& n) { c.r1_gamma = n.as<double>(); }},
       {"d_base_width", [&](const YAML::Node& n) { c.d_base_width = n.as<int>(); }},
       {"d_max_width", [&](const YAML::Node& n) { c.d_max_width = n.as<int>(); }},
       {"latent_dim", [&](const YAML::Node& n) { c.latent_dim = n.as<int>(); }},
@@ -167,6 +176,10 @@ std::string P2iConfig::ToYamlString() const {
   e << YAML::Key << "g_widths" << YAML::Value << YAML::Flow << g_widths;
   e << YAML::Key << "g_fc_width" << YAML::Value << g_fc_width;
   e << YAML::Key << "g_norm" << YAML::Value << g_norm;
+  e << YAML::Key << "pose_encoding" << YAML::Value << pose_encoding;
+  e << YAML::Key << "fourier_bands" << YAML::Value << fourier_bands;
+  e << YAML::Key << "recon_weight" << YAML::Value << recon_weight;
+  e << YAML::Key << "r1_gamma" << YAML::Value << r1_gamma;
   e << YAML::Key << "d_base_width" << YAML::Value << d_base_width;
   e << YAML::Key << "d_max_width" << YAML::Value << d_max_width;
   e << YAML::Key << "latent_dim" << YAML::Value << latent_dim;

@@ -34,6 +34,11 @@ struct P2iConfig {
   /// pixel's feature vector scaled to unit RMS, ProGAN's PixelNorm: per sample, no batch
   /// statistics, so batch-1 inference equals training).
   std::string g_norm = "none";
+  /// Encoding of the normalised pose before G's MLP (not in the paper; docs/MODEL.md "learn_128"):
+  /// "none" = the 7-vector as is; "fourier" = [y, sin(2^k pi y), cos(2^k pi y)] for
+  /// k = 0 .. fourier_bands - 1 (Tancik et al. 2020), 7 (1 + 2 fourier_bands) inputs.
+  std::string pose_encoding = "none";
+  int fourier_bands = 6;
   int d_base_width = 32;         ///< D's first block width, doubling per block up to d_max_width
   int d_max_width = 512;
   int latent_dim = 1024;         ///< F_l size (the paper's 1024)
@@ -52,6 +57,12 @@ struct P2iConfig {
   double k1 = 1.0;
   double k2 = 1.0;
   double k3 = 1.0;
+  /// Weight of a pix2pix-style L1 reconstruction term on G, recon_weight * E|I_g(y) - I_r(y)|
+  /// (all channels), added to L_G. Not in the paper: 0 in the paper-literal presets.
+  double recon_weight = 0.0;
+  /// R1 zero-centred gradient penalty on D's real images, r1_gamma / 2 * E||grad_I D_pro(I_r)||^2
+  /// (Mescheder et al. 2018), added to L_D. Not in the paper: 0 = off.
+  double r1_gamma = 0.0;
 
   // --- optimisation ---
   int batch_size = 16;
@@ -75,6 +86,8 @@ struct P2iConfig {
   double explode_factor = 50;  ///< a loss above factor x its running mean counts as divergence
 
   int Channels() const { return depth ? 4 : 3; }
+  /// Inputs of G's first layer: 7, or 7 (1 + 2 fourier_bands) with the Fourier encoding.
+  int PoseInputs() const { return pose_encoding == "fourier" ? 7 * (1 + 2 * fourier_bands) : 7; }
   bool IsBaseline() const { return model == "cnn_baseline"; }
   /// The G width per stage that the schedule gives (4x4 first).
   std::vector<int> GeneratorWidths() const;

@@ -1,12 +1,12 @@
 /// @file procedural_dataset.cc
-/// @brief MakeProceduralDataset (declared in trainer.h): an analytic box room for tests and
+/// @brief MakeProceduralDataset: an analytic box room for tests and
 /// `p2i train --data procedural` while no renderer or dataset is at hand.
 #include <algorithm>
 #include <cmath>
 
 #include <Eigen/Geometry>
 
-#include "model/trainer.h"
+#include "model/procedural_dataset.h"
 
 namespace p2i::model {
 

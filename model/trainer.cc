@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 #include <cstring>
+#include <limits>
 #include <random>
 #include <stdexcept>
 
@@ -21,6 +22,8 @@
 #include "model/losses.h"
 #include "model/metrics.h"
 #include "model/networks.h"
+#include "model/pose_dependence.h"
+#include "scene/image_ops.h"
 
 namespace p2i::model {
 
@@ -28,31 +31,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 using nlohmann::json;
-
-// Centre crop to a square, then resize to side x side.
-cv::Mat CropResize(const cv::Mat& in, int side, int interpolation) {
-  const int s = std::min(in.cols, in.rows);
-  const cv::Rect roi((in.cols - s) / 2, (in.rows - s) / 2, s, s);
-  cv::Mat out;
-  cv::resize(in(roi), out, cv::Size(side, side), 0, 0, interpolation);
-  return out;
-}
-
-// The intrinsics after CropResize.
-scene::CameraInfo SquareCamera(const scene::CameraInfo& in, int side) {
-  scene::CameraInfo c = in;
-  const int s = std::min(in.image_width, in.image_height);
-  const double x0 = (in.image_width - s) / 2, y0 = (in.image_height - s) / 2;
-  const double scale = static_cast<double>(side) / s;
-  const double fx = in.fx() * scale, fy = in.fy() * scale;
-  const double cx = (in.cx() - x0 + 0.5) * scale - 0.5, cy = (in.cy() - y0 + 0.5) * scale - 0.5;
-  c.image_width = side;
-  c.image_height = side;
-  c.camera_matrix = {fx, 0, cx, 0, fy, cy, 0, 0, 1};
-  c.projection_matrix = {fx, 0, cx, 0, 0, fy, cy, 0, 0, 0, 1, 0};
-  c.distortion_coefficients.assign(5, 0.0);
-  return c;
-}
 
 std::array<double, 7> PoseArray(const scene::Pose& p) {
   const auto v = p.ToVector7();
@@ -79,15 +57,18 @@ Prepared Prepare(const std::vector<scene::RgbdSample>& frames, const P2iConfig& 
     const auto& f = frames[n == frames.size() ? i : i * frames.size() / n];
     if (f.rgb.empty() || f.rgb.type() != CV_8UC3)
       throw std::invalid_argument("training frame '" + f.id + "' has no CV_8UC3 rgb image");
-    cv::Mat rgb = CropResize(f.rgb, r, cv::INTER_AREA);
+    if (config.depth && (f.depth.empty() || f.depth.type() != CV_32FC1))
+      throw std::invalid_argument("training frame '" + f.id +
+                                  "' has no CV_32FC1 depth image; set depth: false for RGB");
+    scene::RgbdSample s = f;
+    if (!config.depth) s.depth = cv::Mat();
+    s = scene::CenterCropResizeSample(s, r, r);
+    cv::Mat rgb = s.rgb.isContinuous() ? s.rgb : s.rgb.clone();
     p.rgb.push_back(rgb);
     auto t = torch::from_blob(rgb.data, {r, r, 3}, torch::kUInt8).permute({2, 0, 1}).to(torch::kFloat);
     p.images[i].slice(0, 0, 3).copy_(t / 127.5 - 1.0);
     if (config.depth) {
-      if (f.depth.empty() || f.depth.type() != CV_32FC1)
-        throw std::invalid_argument("training frame '" + f.id +
-                                    "' has no CV_32FC1 depth image; set depth: false for RGB");
-      cv::Mat d = CropResize(f.depth, r, cv::INTER_NEAREST);
+      cv::Mat d = s.depth.isContinuous() ? s.depth : s.depth.clone();
       auto td = torch::from_blob(d.data, {r, r}, torch::kFloat).clone();
       td = torch::nan_to_num(td, 0.0, 0.0, 0.0);
       p.images[i][3].copy_((td / config.depth_max).clamp(0.0, 1.0) * 2.0 - 1.0);
@@ -109,9 +90,6 @@ cv::Mat ToRgb8(const torch::Tensor& image) {  // C x R x R in [-1, 1]
   return out;
 }
 
-// PSNR of two 8-bit RGB images (dB, capped at kPsnrCapDb), as the evaluation reports it.
-double Psnr8(const cv::Mat& a, const cv::Mat& b) { return Psnr(a, b); }
-
 std::string FormatDuration(double seconds) {
   if (!std::isfinite(seconds) || seconds < 0) return "--:--";
   const int s = static_cast<int>(seconds);
@@ -125,25 +103,56 @@ struct Divergence {
   std::string why;
 };
 
-class Run {
- public:
-  Run(const P2iConfig& config, const TrainerOptions& options) : options_(options) {
-    config_ = config;
-  }
+// What one training step hands to the bookkeeping after it: the log line and the progress text.
+struct StepOutcome {
+  json line;
+  std::string losses;
+};
 
-  TrainReport Go(const scene::RgbdDataset& train, const scene::RgbdDataset& val);
+// Validation figures on the held-out frames.
+struct Validation {
+  double psnr = 0.0;
+  double pose_dependence = std::nan("");
+};
+
+// One Trainer::Run call: set-up (inputs, checkpoint/warm start, networks, data), the phases, the
+// report. Named steps, each a screen or less.
+class TrainingRun {
+ public:
+  TrainingRun(const P2iConfig& config, const TrainerOptions& options)
+      : config_(config), options_(options) {}
+
+  TrainReport Execute(const scene::RgbdDataset& train, const scene::RgbdDataset& val);
 
  private:
+  // --- set-up
+  void CheckRequest(const scene::RgbdDataset& train) const;
+  std::string FindSource(CheckpointMeta* source);
+  void CheckShape(const P2iConfig& a, const std::string& path, bool warm) const;
+  void BuildNetworks();
+  void InitialiseState(const std::string& warm_from, const CheckpointMeta& source,
+                       const scene::RgbdDataset& train);
+  double MeanImagePsnr() const;
+  void LogStart(const scene::RgbdDataset& train, const std::string& warm_from, double mean_psnr);
+  TrainReport Finish(TrainReport report);
+  // --- steps
+  int PhaseOne(int target);
+  StepOutcome BaselineStep(int step, const torch::Tensor& real, const torch::Tensor& y);
+  StepOutcome AdversarialStep(int step, const torch::Tensor& real, const torch::Tensor& y);
+  void ExtraDiscriminatorSteps(int step);
+  int PhaseTwo(int target);
+  StepOutcome EnetStep(int step, const torch::Tensor& generated, const torch::Tensor& real);
+  void AfterStep(int phase, int done, int target, const StepOutcome& outcome, const char* name);
+  // --- helpers
   void ApplyLearningRates();
   void Save();
   void Rollback(const std::string& why);
   void Log(const json& line);
   void Progress(const char* phase, int step, int target, const std::string& losses);
-  double Validate(bool use_enet);
+  Validation Validate(bool use_enet);
   torch::Tensor BatchIndices(int phase, int step, int64_t n) const;
   void CheckLoss(const torch::Tensor& loss, const char* what, int step);
-  int PhaseOne(int target);
-  int PhaseTwo(int target);
+  void TrackLoss(double magnitude);
   void UpdateEma();
   /// Between steps: true (after saving a checkpoint at the current step) when should_stop says so.
   bool StopNow();
@@ -151,13 +160,14 @@ class Run {
   P2iConfig config_;
   TrainerOptions options_;
   std::string checkpoint_path_;
+  bool load_ = false;  // resume or phase 2: the checkpoint in out_dir
   std::unique_ptr<Networks> nets_;
   std::unique_ptr<torch::optim::Adam> opt_g_, opt_d_, opt_e_;
   CheckpointMeta meta_;
   Prepared train_, val_;
   std::ofstream log_;
   double ema_ = -1.0;
-  double last_val_psnr_ = 0.0;
+  Validation last_val_;
   bool injected_ = false;
   bool stopped_ = false;
   Clock::time_point phase_start_;
@@ -166,7 +176,7 @@ class Run {
   std::shared_ptr<DataParallel> dp_;  // data-parallel ranks (null = one process)
 };
 
-void Run::ApplyLearningRates() {
+void TrainingRun::ApplyLearningRates() {
   auto set = [&](torch::optim::Adam* opt, double lr) {
     if (opt == nullptr) return;
     for (auto& group : opt->param_groups())
@@ -177,12 +187,12 @@ void Run::ApplyLearningRates() {
   set(opt_e_.get(), config_.lr_enet);
 }
 
-void Run::Save() {
+void TrainingRun::Save() {
   if (dp_ && !dp_->IsWriter()) return;  // rank 0 writes the checkpoints
   SaveCheckpoint(checkpoint_path_, meta_, *nets_, {opt_g_.get(), opt_d_.get(), opt_e_.get()});
 }
 
-void Run::Rollback(const std::string& why) {
+void TrainingRun::Rollback(const std::string& why) {
   if (meta_.rollbacks >= options_.max_rollbacks)
     throw std::runtime_error("training diverged " + std::to_string(meta_.rollbacks + 1) +
                              " times (" + why + "); giving up. Lower the learning rates in the "
@@ -208,7 +218,7 @@ void Run::Rollback(const std::string& why) {
                  why.c_str(), meta_.lr_scale);
 }
 
-void Run::UpdateEma() {
+void TrainingRun::UpdateEma() {
   torch::NoGradGuard no_grad;
   // Warm-up: a plain running mean of all G's so far until it reaches the configured decay
   // (decay_t = (1 + t) / (2 + t)), so the random initialisation does not linger for
@@ -221,7 +231,7 @@ void Run::UpdateEma() {
     kv.value().mul_(decay).add_(src[kv.key()], 1.0 - decay);
 }
 
-bool Run::StopNow() {
+bool TrainingRun::StopNow() {
   if (stopped_) return true;
   bool stop = options_.should_stop && options_.should_stop();
   if (dp_) stop = dp_->Any(stop);  // every rank stops at the same step
@@ -233,12 +243,12 @@ bool Run::StopNow() {
   return true;
 }
 
-void Run::Log(const json& line) {
+void TrainingRun::Log(const json& line) {
   log_ << line.dump() << "\n";
   log_.flush();
 }
 
-void Run::Progress(const char* phase, int step, int target, const std::string& losses) {
+void TrainingRun::Progress(const char* phase, int step, int target, const std::string& losses) {
   if (!options_.progress) return;
   const auto now = Clock::now();
   if (step != target && now - last_progress_ < std::chrono::milliseconds(250)) return;
@@ -250,30 +260,42 @@ void Run::Progress(const char* phase, int step, int target, const std::string& l
   const int filled = target > 0 ? kBar * step / target : kBar;
   std::string bar(filled, '#');
   bar.resize(kBar, '.');
-  std::fprintf(stderr, "\r%s [%s] %d/%d %s %.2f it/s ETA %s   ", phase, bar.c_str(), step, target,
-               losses.c_str(), rate, FormatDuration(eta).c_str());
+  char pd[48] = "";
+  if (std::isfinite(last_val_.pose_dependence))
+    std::snprintf(pd, sizeof(pd), " val %.2f dB pose-dep %.2f", last_val_.psnr,
+                  last_val_.pose_dependence);
+  std::fprintf(stderr, "\r%s [%s] %d/%d %s%s %.2f it/s ETA %s   ", phase, bar.c_str(), step,
+               target, losses.c_str(), pd, rate, FormatDuration(eta).c_str());
   if (step == target) std::fprintf(stderr, "\n");
 }
 
-double Run::Validate(bool use_enet) {
-  if (val_.rgb.empty()) return 0.0;
+Validation TrainingRun::Validate(bool use_enet) {
+  Validation v;
+  if (val_.rgb.empty()) return v;
   torch::NoGradGuard no_grad;
   nets_->g->eval();
   if (use_enet) nets_->e->eval();
   double sum = 0.0;
+  PoseDependence dependence;
   const int64_t n = val_.poses.size(0);
   for (int64_t i = 0; i < n; i += 16) {
     const int64_t j = std::min(n, i + 16);
     auto out = nets_->Serving()->forward(val_.poses.slice(0, i, j));
     if (use_enet) out = nets_->e->forward(out);
-    for (int64_t k = i; k < j; ++k) sum += Psnr8(ToRgb8(out[k - i]), val_.rgb[k]);
+    for (int64_t k = i; k < j; ++k) {
+      const cv::Mat rgb = ToRgb8(out[k - i]);
+      sum += Psnr(rgb, val_.rgb[k]);
+      dependence.Add(rgb, val_.rgb[k]);
+    }
   }
   nets_->g->train();
   if (use_enet) nets_->e->train();
-  return sum / static_cast<double>(n);
+  v.psnr = sum / static_cast<double>(n);
+  v.pose_dependence = dependence.Score();
+  return v;
 }
 
-torch::Tensor Run::BatchIndices(int phase, int step, int64_t n) const {
+torch::Tensor TrainingRun::BatchIndices(int phase, int step, int64_t n) const {
   // A pure function of (seed, phase, step): resuming needs no sampler state.
   std::mt19937_64 rng(config_.seed * 1000003ULL + static_cast<uint64_t>(phase) * 7919ULL +
                       static_cast<uint64_t>(step));
@@ -287,7 +309,8 @@ torch::Tensor Run::BatchIndices(int phase, int step, int64_t n) const {
   return torch::tensor(idx, torch::kLong);
 }
 
-void Run::CheckLoss(const torch::Tensor& loss, const char* what, int step) {
+void TrainingRun::CheckLoss(const torch::Tensor& loss, const char* what, int step) {
+  (void)step;
   const double v = loss.item<double>();
   if (!std::isfinite(v)) throw Divergence{std::string(what) + " is not finite"};
   const double a = std::abs(v);
@@ -295,8 +318,134 @@ void Run::CheckLoss(const torch::Tensor& loss, const char* what, int step) {
     throw Divergence{std::string(what) + " exploded to " + std::to_string(v)};
 }
 
-int Run::PhaseOne(int target) {
+void TrainingRun::TrackLoss(double magnitude) {
+  ema_ = ema_ < 0 ? magnitude : 0.95 * ema_ + 0.05 * magnitude;
+}
+
+// Logging, validation (with the pose-dependence warning), checkpoint and progress after a step.
+void TrainingRun::AfterStep(int phase, int done, int target, const StepOutcome& outcome,
+                            const char* name) {
+  if (done % 10 == 0 || done == target) Log(outcome.line);
+  if (done % config_.val_every == 0 || done == target) {
+    last_val_ = Validate(phase == 2);
+    const double pd = last_val_.pose_dependence;
+    Log({{"phase", phase},
+         {"step", done},
+         {"val_psnr", last_val_.psnr},
+         {"pose_dependence", std::isfinite(pd) ? json(pd) : json(nullptr)}});
+    const std::string warning = PoseDependenceWarning(pd);
+    if (!warning.empty()) {
+      Log({{"event", "warning"}, {"phase", phase}, {"step", done}, {"pose_dependence", pd},
+           {"message", warning}});
+      if (options_.progress) std::fprintf(stderr, "\n%s (step %d)\n", warning.c_str(), done);
+    }
+  }
+  if (done % config_.checkpoint_every == 0 || done == target) Save();
+  Progress(name, done, target, outcome.losses);
+}
+
+StepOutcome TrainingRun::BaselineStep(int step, const torch::Tensor& real, const torch::Tensor& y) {
+  auto loss = RegressionLoss(nets_->g->forward(y), real);
+  if (options_.inject_nan_at_step == step && !injected_) {
+    injected_ = true;
+    loss = loss * std::nan("");
+  }
+  CheckLoss(loss, "L2 loss", step);
+  opt_g_->zero_grad();
+  loss.backward();
+  if (dp_) dp_->AverageGradients(*opt_g_);
+  opt_g_->step();
+  const double v = loss.item<double>();
+  TrackLoss(std::abs(v));
+  StepOutcome o{{{"phase", 1}, {"step", step + 1}, {"loss", v}}, ""};
+  char buf[64];
+  std::snprintf(buf, sizeof(buf), "L2 %.4f", v);
+  o.losses = buf;
+  return o;
+}
+
+// d_steps > 1: extra D steps first, each on its own batch (a pure function of the step too),
+// with fakes made without autograd.
+void TrainingRun::ExtraDiscriminatorSteps(int step) {
   const LossWeights w = LossWeights::From(config_);
+  const int64_t n = train_.images.size(0);
+  for (int k = 1; k < config_.d_steps; ++k) {
+    const auto idx_k = BatchIndices(100 + k, step, n);
+    const auto y_k = train_.poses.index_select(0, idx_k);
+    torch::Tensor fake_k;
+    {
+      torch::NoGradGuard no_grad;
+      fake_k = nets_->g->forward(y_k);
+    }
+    auto& d = nets_->d;
+    auto dl_k = DiscriminatorLoss(d->forward(train_.images.index_select(0, idx_k)),
+                                  d->forward(fake_k), d->MapPose(y_k), y_k, w);
+    CheckLoss(dl_k.total, "L_D", step);
+    opt_d_->zero_grad();
+    dl_k.total.backward();
+    if (dp_) dp_->AverageGradients(*opt_d_);
+    opt_d_->step();
+  }
+}
+
+StepOutcome TrainingRun::AdversarialStep(int step, const torch::Tensor& real,
+                                         const torch::Tensor& y) {
+  const LossWeights w = LossWeights::From(config_);
+  auto& d = nets_->d;
+  ExtraDiscriminatorSteps(step);
+  // D step on a detached fake (G's forward is made once and reused by the G step).
+  const auto fake = nets_->g->forward(y);
+  const auto mp = d->MapPose(y);
+  const bool r1 = config_.r1_gamma > 0;
+  const auto real_in = r1 ? real.detach().requires_grad_(true) : real;
+  const DOutput d_real = d->forward(real_in);
+  auto dl = DiscriminatorLoss(d_real, d->forward(fake.detach()), mp, y, w);
+  torch::Tensor r1_term;
+  if (r1) {
+    r1_term = R1Penalty(ProjectionScore(d_real, mp, w), real_in, config_.r1_gamma);
+    dl.total = dl.total + r1_term;
+  }
+  if (options_.inject_nan_at_step == step && !injected_) {
+    injected_ = true;
+    dl.total = dl.total * std::nan("");
+  }
+  CheckLoss(dl.total, "L_D", step);
+  opt_d_->zero_grad();
+  dl.total.backward();
+  if (dp_) dp_->AverageGradients(*opt_d_);
+  opt_d_->step();
+  // G step through the updated D (D's grads are discarded: only opt_g steps).
+  auto gl = GeneratorLoss(d->forward(fake), d->MapPose(y), y, w);
+  torch::Tensor recon;
+  if (config_.recon_weight > 0) {
+    recon = ReconstructionLoss(fake, real);
+    gl.total = gl.total + config_.recon_weight * recon;
+  }
+  CheckLoss(gl.total, "L_G", step);
+  opt_g_->zero_grad();
+  gl.total.backward();
+  if (dp_) dp_->AverageGradients(*opt_g_);
+  opt_g_->step();
+  if (nets_->g_ema) UpdateEma();
+  const double ld = dl.total.item<double>(), lg = gl.total.item<double>();
+  TrackLoss(std::abs(ld) + std::abs(lg));
+  StepOutcome o{{{"phase", 1}, {"step", step + 1}}, ""};
+  o.line["loss_d"] = ld;
+  o.line["loss_g"] = lg;
+  o.line["pro"] = dl.pro.item<double>();
+  o.line["pe_real"] = dl.pe_real.item<double>();
+  o.line["pe_fake"] = dl.pe_fake.item<double>();
+  o.line["g_adv"] = gl.adv.item<double>();
+  o.line["g_pose"] = gl.pose.item<double>();
+  if (recon.defined()) o.line["g_recon"] = recon.item<double>();
+  if (r1_term.defined()) o.line["d_r1"] = r1_term.item<double>();
+  char buf[96];
+  std::snprintf(buf, sizeof(buf), "L_D %.3f L_G %.3f", ld, lg);
+  o.losses = buf;
+  return o;
+}
+
+int TrainingRun::PhaseOne(int target) {
   const int64_t n = train_.images.size(0);
   phase_start_ = Clock::now();
   phase_start_step_ = meta_.phase1_step;
@@ -307,102 +456,43 @@ int Run::PhaseOne(int target) {
     const auto idx = BatchIndices(1, step, n);
     const auto real = train_.images.index_select(0, idx);
     const auto y = train_.poses.index_select(0, idx);
-    json line{{"phase", 1}, {"step", step + 1}};
-    std::string losses;
+    StepOutcome outcome;
     try {
-      if (config_.IsBaseline()) {
-        auto loss = RegressionLoss(nets_->g->forward(y), real);
-        if (options_.inject_nan_at_step == step && !injected_) {
-          injected_ = true;
-          loss = loss * std::nan("");
-        }
-        CheckLoss(loss, "L2 loss", step);
-        opt_g_->zero_grad();
-        loss.backward();
-        if (dp_) dp_->AverageGradients(*opt_g_);
-        opt_g_->step();
-        const double v = loss.item<double>();
-        ema_ = ema_ < 0 ? std::abs(v) : 0.95 * ema_ + 0.05 * std::abs(v);
-        line["loss"] = v;
-        char buf[64];
-        std::snprintf(buf, sizeof(buf), "L2 %.4f", v);
-        losses = buf;
-      } else {
-        auto& g = nets_->g;
-        auto& d = nets_->d;
-        // d_steps > 1: extra D steps first, each on its own batch (a pure function of the step
-        // too), with fakes made without autograd.
-        for (int k = 1; k < config_.d_steps; ++k) {
-          const auto idx_k = BatchIndices(100 + k, step, n);
-          const auto y_k = train_.poses.index_select(0, idx_k);
-          torch::Tensor fake_k;
-          {
-            torch::NoGradGuard no_grad;
-            fake_k = g->forward(y_k);
-          }
-          auto dl_k = DiscriminatorLoss(d->forward(train_.images.index_select(0, idx_k)),
-                                        d->forward(fake_k), d->MapPose(y_k), y_k, w);
-          CheckLoss(dl_k.total, "L_D", step);
-          opt_d_->zero_grad();
-          dl_k.total.backward();
-          if (dp_) dp_->AverageGradients(*opt_d_);
-          opt_d_->step();
-        }
-        // D step on a detached fake.
-        const auto fake = g->forward(y);
-        auto mp = d->MapPose(y);
-        auto dl = DiscriminatorLoss(d->forward(real), d->forward(fake.detach()), mp, y, w);
-        if (options_.inject_nan_at_step == step && !injected_) {
-          injected_ = true;
-          dl.total = dl.total * std::nan("");
-        }
-        CheckLoss(dl.total, "L_D", step);
-        opt_d_->zero_grad();
-        dl.total.backward();
-        if (dp_) dp_->AverageGradients(*opt_d_);
-        opt_d_->step();
-        // G step through the updated D (D's grads are discarded: only opt_g steps).
-        auto gl = GeneratorLoss(d->forward(fake), d->MapPose(y), y, w);
-        CheckLoss(gl.total, "L_G", step);
-        opt_g_->zero_grad();
-        gl.total.backward();
-        if (dp_) dp_->AverageGradients(*opt_g_);
-        opt_g_->step();
-        if (nets_->g_ema) UpdateEma();
-        const double ld = dl.total.item<double>(), lg = gl.total.item<double>();
-        const double mon = std::abs(ld) + std::abs(lg);
-        ema_ = ema_ < 0 ? mon : 0.95 * ema_ + 0.05 * mon;
-        line["loss_d"] = ld;
-        line["loss_g"] = lg;
-        line["pro"] = dl.pro.item<double>();
-        line["pe_real"] = dl.pe_real.item<double>();
-        line["pe_fake"] = dl.pe_fake.item<double>();
-        line["g_adv"] = gl.adv.item<double>();
-        line["g_pose"] = gl.pose.item<double>();
-        char buf[96];
-        std::snprintf(buf, sizeof(buf), "L_D %.3f L_G %.3f", ld, lg);
-        losses = buf;
-      }
+      outcome = config_.IsBaseline() ? BaselineStep(step, real, y) : AdversarialStep(step, real, y);
     } catch (const Divergence& div) {
       Rollback(div.why);
       continue;
     }
     meta_.phase1_step = step + 1;
-    const int s = meta_.phase1_step;
-    if (s % 10 == 0 || s == target) Log(line);
-    if (s % config_.val_every == 0 || s == target) {
-      const double psnr = Validate(false);
-      Log({{"phase", 1}, {"step", s}, {"val_psnr", psnr}});
-      last_val_psnr_ = psnr;
-    }
-    if (s % config_.checkpoint_every == 0 || s == target) Save();
-    Progress(name, s, target, losses);
+    AfterStep(1, meta_.phase1_step, target, outcome, name);
   }
   return meta_.phase1_step;
 }
 
-int Run::PhaseTwo(int target) {
+StepOutcome TrainingRun::EnetStep(int step, const torch::Tensor& generated,
+                                  const torch::Tensor& real) {
   const LossWeights w = LossWeights::From(config_);
+  auto el = EnetLoss(nets_->e->forward(generated), real, w);
+  CheckLoss(el.total, "L_ENET", step);
+  opt_e_->zero_grad();
+  el.total.backward();
+  if (dp_) dp_->AverageGradients(*opt_e_);
+  opt_e_->step();
+  const double v = el.total.item<double>();
+  TrackLoss(std::abs(v));
+  StepOutcome o{{{"phase", 2},
+                 {"step", step + 1},
+                 {"loss_enet", v},
+                 {"pixel", el.pixel.item<double>()},
+                 {"edge", el.edge.item<double>()}},
+                ""};
+  char buf[64];
+  std::snprintf(buf, sizeof(buf), "L_ENET %.3f", v);
+  o.losses = buf;
+  return o;
+}
+
+int TrainingRun::PhaseTwo(int target) {
   const int64_t n = train_.images.size(0);
   nets_->g->eval();
   for (auto& p : nets_->g->parameters()) p.set_requires_grad(false);
@@ -417,44 +507,195 @@ int Run::PhaseTwo(int target) {
     const auto y = train_.poses.index_select(0, idx);
     torch::Tensor generated;
     {
-      torch::NoGradGuard no_grad;
-      generated = nets_->Serving()->forward(y);  // the G that will render
+      torch::NoGradGuard no_grad;  // the frozen G that will render
+      generated = nets_->Serving()->forward(y);
     }
-    json line{{"phase", 2}, {"step", step + 1}};
-    std::string losses;
+    StepOutcome outcome;
     try {
-      auto el = EnetLoss(nets_->e->forward(generated), real, w);
-      CheckLoss(el.total, "L_ENET", step);
-      opt_e_->zero_grad();
-      el.total.backward();
-      if (dp_) dp_->AverageGradients(*opt_e_);
-      opt_e_->step();
-      const double v = el.total.item<double>();
-      ema_ = ema_ < 0 ? std::abs(v) : 0.95 * ema_ + 0.05 * std::abs(v);
-      line["loss_enet"] = v;
-      line["pixel"] = el.pixel.item<double>();
-      line["edge"] = el.edge.item<double>();
-      char buf[64];
-      std::snprintf(buf, sizeof(buf), "L_ENET %.3f", v);
-      losses = buf;
+      outcome = EnetStep(step, generated, real);
     } catch (const Divergence& div) {
       Rollback(div.why);
       continue;
     }
     meta_.phase2_step = step + 1;
-    const int s = meta_.phase2_step;
-    if (s % 10 == 0 || s == target) Log(line);
-    if (s % config_.val_every == 0 || s == target) {
-      const double psnr = Validate(true);
-      Log({{"phase", 2}, {"step", s}, {"val_psnr", psnr}});
-      last_val_psnr_ = psnr;
-    }
-    if (s % config_.checkpoint_every == 0 || s == target) Save();
-    Progress("phase2", s, target, losses);
+    AfterStep(2, meta_.phase2_step, target, outcome, "phase2");
   }
   for (auto& p : nets_->g->parameters()) p.set_requires_grad(true);
   nets_->g->train();
   return meta_.phase2_step;
+}
+
+void TrainingRun::CheckRequest(const scene::RgbdDataset& train) const {
+  if (train.frames.size() < 2)
+    throw std::invalid_argument("training needs at least 2 frames, got " +
+                                std::to_string(train.frames.size()));
+  if (load_ && !std::filesystem::exists(checkpoint_path_))
+    throw std::runtime_error(std::string(options_.resume ? "--resume" : "phase 2") + " needs " +
+                             checkpoint_path_ + ", which does not exist: run phase 1 first");
+  if (options_.phase == 2 && (config_.IsBaseline() || !config_.enet))
+    throw std::invalid_argument("phase 2 trains ENET, but config '" + config_.name +
+                                "' has none (cnn_baseline or enet: false)");
+}
+
+void TrainingRun::CheckShape(const P2iConfig& a, const std::string& path, bool warm) const {
+  if (a.resolution != config_.resolution || a.Channels() != config_.Channels() ||
+      a.model != config_.model || a.GeneratorWidths() != config_.GeneratorWidths() ||
+      a.g_fc_width != config_.g_fc_width || a.g_norm != config_.g_norm ||
+      a.PoseInputs() != config_.PoseInputs())
+    throw std::runtime_error("checkpoint " + path + " was trained with config '" + a.name +
+                             "' of another shape (resolution, channels, model, G widths, "
+                             "g_fc_width, g_norm or pose_encoding differ from '" + config_.name +
+                             "')");
+  if (warm && a.enet && config_.enet &&
+      (a.enet_width != config_.enet_width || a.enet_blocks != config_.enet_blocks))
+    throw std::runtime_error("checkpoint " + path + " has an ENET of another shape (enet_width, "
+                             "enet_blocks) than config '" + config_.name + "'");
+}
+
+// The warm-start file ("" = none): an inference checkpoint in out_dir (resume) or
+// options_.init_from (no resume). Checks the source's shape; on resume adopts its config with
+// the given schedule.
+std::string TrainingRun::FindSource(CheckpointMeta* source) {
+  std::string warm_from;
+  if (load_) {
+    *source = ReadCheckpointMeta(checkpoint_path_);
+    if (source->inference_only) warm_from = checkpoint_path_;
+  } else if (!options_.init_from.empty()) {
+    *source = ReadCheckpointMeta(options_.init_from);
+    warm_from = options_.init_from;
+  }
+  if (!load_ && warm_from.empty()) return warm_from;
+  CheckShape(source->config, load_ ? checkpoint_path_ : warm_from, !warm_from.empty());
+  if (load_) {  // resume: the checkpoint's config, the given schedule
+    const P2iConfig schedule = config_;
+    config_ = source->config;
+    config_.steps_phase1 = schedule.steps_phase1;
+    config_.steps_phase2 = schedule.steps_phase2;
+    config_.val_every = schedule.val_every;
+    config_.checkpoint_every = schedule.checkpoint_every;
+  }
+  return warm_from;
+}
+
+void TrainingRun::BuildNetworks() {
+  torch::manual_seed(config_.seed);
+  nets_ = std::make_unique<Networks>(config_);
+  const auto adam = [&](double lr) {
+    return torch::optim::AdamOptions(lr).betas({config_.beta1, config_.beta2});
+  };
+  opt_g_ = std::make_unique<torch::optim::Adam>(nets_->g->parameters(), adam(config_.lr_g));
+  if (nets_->d)
+    opt_d_ = std::make_unique<torch::optim::Adam>(nets_->d->parameters(), adam(config_.lr_d));
+  if (nets_->e)
+    opt_e_ = std::make_unique<torch::optim::Adam>(nets_->e->parameters(), adam(config_.lr_enet));
+}
+
+void TrainingRun::InitialiseState(const std::string& warm_from, const CheckpointMeta& source,
+                                  const scene::RgbdDataset& train) {
+  if (!warm_from.empty()) {
+    // G (and ENET when both have one) from the file; D and the optimisers stay fresh.
+    const bool with_enet = nets_->e && source.config.enet;
+    LoadWeights(warm_from, *nets_, with_enet);
+    meta_ = source;
+    meta_.config = config_;
+    meta_.inference_only = false;
+    meta_.lr_scale = 1.0;
+    meta_.rollbacks = 0;
+    if (!with_enet) meta_.phase2_step = 0;
+  } else if (load_) {
+    meta_ = LoadCheckpoint(checkpoint_path_, *nets_, {opt_g_.get(), opt_d_.get(), opt_e_.get()},
+                           /*restore_rng=*/true);
+    meta_.config = config_;
+  } else {
+    meta_.config = config_;
+    std::vector<std::array<double, 7>> poses;
+    for (const auto& f : train.frames) poses.push_back(PoseArray(f.pose));
+    meta_.normalizer = PoseNormalizer::FromPoses(poses);
+    meta_.camera = scene::CenterCropResizeCamera(train.camera, config_.resolution,
+                                                 config_.resolution);
+  }
+  ApplyLearningRates();
+}
+
+// Mean training image as a predictor: the floor a model must beat (0 without validation).
+double TrainingRun::MeanImagePsnr() const {
+  if (val_.rgb.empty()) return 0.0;
+  cv::Mat sum = cv::Mat::zeros(config_.resolution, config_.resolution, CV_64FC3);
+  for (const auto& m : train_.rgb) cv::accumulate(m, sum);
+  cv::Mat mean;
+  sum.convertTo(mean, CV_8UC3, 1.0 / train_.rgb.size());
+  double s = 0;
+  for (const auto& m : val_.rgb) s += Psnr(mean, m);
+  return s / val_.rgb.size();
+}
+
+void TrainingRun::LogStart(const scene::RgbdDataset& train, const std::string& warm_from,
+                           double mean_psnr) {
+  log_.open(options_.out_dir + (dp_ && dp_->Rank() > 0 ? "/train_log.rank" +
+                                   std::to_string(dp_->Rank()) + ".jsonl" : "/train_log.jsonl"),
+            std::ios::app);
+  if (!log_) throw std::runtime_error("cannot open " + options_.out_dir + "/train_log.jsonl");
+  Log({{"event", "start"},
+       {"config", config_.name},
+       {"model", config_.model},
+       {"resume", load_ && warm_from.empty()},
+       {"warm_start", warm_from},
+       {"phase1_step", meta_.phase1_step},
+       {"phase2_step", meta_.phase2_step},
+       {"train_frames", train.frames.size()},
+       {"val_frames", val_.rgb.size()},
+       {"threads", options_.threads},
+       {"mean_image_val_psnr", mean_psnr}});
+}
+
+TrainReport TrainingRun::Finish(TrainReport report) {
+  Save();
+  if (dp_) dp_->WriteStats(options_.out_dir);
+  Log({{"event", "end"},
+       {"phase1_step", meta_.phase1_step},
+       {"phase2_step", meta_.phase2_step},
+       {"rollbacks", meta_.rollbacks},
+       {"val_psnr", last_val_.psnr},
+       {"pose_dependence", std::isfinite(last_val_.pose_dependence)
+                               ? json(last_val_.pose_dependence)
+                               : json(nullptr)}});
+  report.phase1_steps = meta_.phase1_step;
+  report.phase2_steps = meta_.phase2_step;
+  report.rollbacks = meta_.rollbacks;
+  report.stopped = stopped_;
+  report.val_psnr = last_val_.psnr;
+  report.val_pose_dependence = last_val_.pose_dependence;
+  report.checkpoint_path = checkpoint_path_;
+  report.log_path = options_.out_dir + "/train_log.jsonl";
+  return report;
+}
+
+TrainReport TrainingRun::Execute(const scene::RgbdDataset& train, const scene::RgbdDataset& val) {
+  checkpoint_path_ = Trainer::CheckpointPath(options_.out_dir);
+  load_ = options_.resume || options_.phase == 2;
+  CheckRequest(train);
+  std::filesystem::create_directories(options_.out_dir);
+  torch::set_num_threads(options_.threads);
+  CheckpointMeta source;
+  const std::string warm_from = FindSource(&source);
+  BuildNetworks();
+  InitialiseState(warm_from, source, train);
+  dp_ = DataParallel::For(options_.distributed);
+  if (dp_) dp_->Start(&meta_.phase1_step, &meta_.phase2_step, *nets_);  // same start everywhere
+  train_ = Prepare(train.frames, config_, meta_.normalizer, train.frames.size());
+  val_ = Prepare(val.frames, config_, meta_.normalizer, static_cast<size_t>(options_.max_val_frames));
+  TrainReport report;
+  report.mean_image_val_psnr = MeanImagePsnr();
+  LogStart(train, warm_from, report.mean_image_val_psnr);
+  Save();  // the first rollback point
+  const bool run1 = options_.phase != 2;
+  const bool run2 = options_.phase != 1 && !config_.IsBaseline() && config_.enet;
+  if (run1) PhaseOne(options_.steps >= 0 ? options_.steps : config_.steps_phase1);
+  const int target2 = options_.steps_phase2 >= 0 ? options_.steps_phase2
+                      : options_.steps >= 0     ? options_.steps
+                                                : config_.steps_phase2;
+  if (run2 && !stopped_) PhaseTwo(target2);
+  return Finish(report);
 }
 
 }  // namespace
@@ -481,141 +722,8 @@ std::string Trainer::CheckpointPath(const std::string& out_dir) {
 }
 
 TrainReport Trainer::Run(const scene::RgbdDataset& train, const scene::RgbdDataset& val) {
-  class Run run(config_, options_);
-  return run.Go(train, val);
-}
-
-TrainReport Run::Go(const scene::RgbdDataset& train, const scene::RgbdDataset& val) {
-  if (train.frames.size() < 2)
-    throw std::invalid_argument("training needs at least 2 frames, got " +
-                                std::to_string(train.frames.size()));
-  std::filesystem::create_directories(options_.out_dir);
-  torch::set_num_threads(options_.threads);
-  checkpoint_path_ = Trainer::CheckpointPath(options_.out_dir);
-  const bool load = options_.resume || options_.phase == 2;
-  if (load && !std::filesystem::exists(checkpoint_path_))
-    throw std::runtime_error(std::string(options_.resume ? "--resume" : "phase 2") + " needs " +
-                             checkpoint_path_ + ", which does not exist: run phase 1 first");
-  if (options_.phase == 2 && (config_.IsBaseline() || !config_.enet))
-    throw std::invalid_argument("phase 2 trains ENET, but config '" + config_.name +
-                                "' has none (cnn_baseline or enet: false)");
-  P2iConfig schedule = config_;  // steps, logging cadence: from the given config
-  // Warm start: an inference checkpoint in out_dir (resume) or options_.init_from (no resume).
-  std::string warm_from;
-  CheckpointMeta source;
-  if (load) {
-    source = ReadCheckpointMeta(checkpoint_path_);
-    if (source.inference_only) warm_from = checkpoint_path_;
-  } else if (!options_.init_from.empty()) {
-    source = ReadCheckpointMeta(options_.init_from);
-    warm_from = options_.init_from;
-  }
-  if (load || !warm_from.empty()) {
-    const std::string path = load ? checkpoint_path_ : warm_from;
-    const P2iConfig& a = source.config;
-    if (a.resolution != config_.resolution || a.Channels() != config_.Channels() ||
-        a.model != config_.model || a.GeneratorWidths() != config_.GeneratorWidths() ||
-        a.g_fc_width != config_.g_fc_width || a.g_norm != config_.g_norm)
-      throw std::runtime_error("checkpoint " + path + " was trained with config '" + a.name +
-                               "' of another shape (resolution, channels, model, G widths, "
-                               "g_fc_width or g_norm differ from '" + config_.name + "')");
-    if (!warm_from.empty() && a.enet && config_.enet &&
-        (a.enet_width != config_.enet_width || a.enet_blocks != config_.enet_blocks))
-      throw std::runtime_error("checkpoint " + path + " has an ENET of another shape (enet_width, "
-                               "enet_blocks) than config '" + config_.name + "'");
-    if (load) {  // resume: the checkpoint's config, the given schedule
-      config_ = a;
-      config_.steps_phase1 = schedule.steps_phase1;
-      config_.steps_phase2 = schedule.steps_phase2;
-      config_.val_every = schedule.val_every;
-      config_.checkpoint_every = schedule.checkpoint_every;
-    }
-  }
-  torch::manual_seed(config_.seed);
-  nets_ = std::make_unique<Networks>(config_);
-  const auto adam = [&](double lr) {
-    return torch::optim::AdamOptions(lr).betas({config_.beta1, config_.beta2});
-  };
-  opt_g_ = std::make_unique<torch::optim::Adam>(nets_->g->parameters(), adam(config_.lr_g));
-  if (nets_->d)
-    opt_d_ = std::make_unique<torch::optim::Adam>(nets_->d->parameters(), adam(config_.lr_d));
-  if (nets_->e)
-    opt_e_ = std::make_unique<torch::optim::Adam>(nets_->e->parameters(), adam(config_.lr_enet));
-  if (!warm_from.empty()) {
-    // G (and ENET when both have one) from the file; D and the optimisers stay fresh.
-    const bool with_enet = nets_->e && source.config.enet;
-    LoadWeights(warm_from, *nets_, with_enet);
-    meta_ = source;
-    meta_.config = config_;
-    meta_.inference_only = false;
-    meta_.lr_scale = 1.0;
-    meta_.rollbacks = 0;
-    if (!with_enet) meta_.phase2_step = 0;
-  } else if (load) {
-    meta_ = LoadCheckpoint(checkpoint_path_, *nets_, {opt_g_.get(), opt_d_.get(), opt_e_.get()},
-                           /*restore_rng=*/true);
-    meta_.config = config_;
-  } else {
-    meta_.config = config_;
-    std::vector<std::array<double, 7>> poses;
-    for (const auto& f : train.frames) poses.push_back(PoseArray(f.pose));
-    meta_.normalizer = PoseNormalizer::FromPoses(poses);
-    meta_.camera = SquareCamera(train.camera, config_.resolution);
-  }
-  ApplyLearningRates();
-  dp_ = DataParallel::For(options_.distributed);
-  if (dp_) dp_->Start(&meta_.phase1_step, &meta_.phase2_step, *nets_);  // same start everywhere
-  train_ = Prepare(train.frames, config_, meta_.normalizer, train.frames.size());
-  val_ = Prepare(val.frames, config_, meta_.normalizer, static_cast<size_t>(options_.max_val_frames));
-
-  log_.open(options_.out_dir + (dp_ && dp_->Rank() > 0 ? "/train_log.rank" +
-                                   std::to_string(dp_->Rank()) + ".jsonl" : "/train_log.jsonl"),
-            std::ios::app);
-  if (!log_) throw std::runtime_error("cannot open " + options_.out_dir + "/train_log.jsonl");
-
-  TrainReport report;
-  // Mean training image as a predictor: the floor a model must beat.
-  if (!val_.rgb.empty()) {
-    cv::Mat sum = cv::Mat::zeros(config_.resolution, config_.resolution, CV_64FC3);
-    for (const auto& m : train_.rgb) cv::accumulate(m, sum);
-    cv::Mat mean;
-    sum.convertTo(mean, CV_8UC3, 1.0 / train_.rgb.size());
-    double s = 0;
-    for (const auto& m : val_.rgb) s += Psnr8(mean, m);
-    report.mean_image_val_psnr = s / val_.rgb.size();
-  }
-  Log({{"event", "start"},
-       {"config", config_.name},
-       {"model", config_.model},
-       {"resume", load && warm_from.empty()},
-       {"warm_start", warm_from},
-       {"phase1_step", meta_.phase1_step},
-       {"phase2_step", meta_.phase2_step},
-       {"train_frames", train.frames.size()},
-       {"val_frames", val_.rgb.size()},
-       {"threads", options_.threads},
-       {"mean_image_val_psnr", report.mean_image_val_psnr}});
-  Save();  // the first rollback point
-
-  const bool run1 = options_.phase != 2;
-  const bool run2 = options_.phase != 1 && !config_.IsBaseline() && config_.enet;
-  if (run1) PhaseOne(options_.steps >= 0 ? options_.steps : config_.steps_phase1);
-  if (run2 && !stopped_) PhaseTwo(options_.steps >= 0 ? options_.steps : config_.steps_phase2);
-  Save();
-  Log({{"event", "end"},
-       {"phase1_step", meta_.phase1_step},
-       {"phase2_step", meta_.phase2_step},
-       {"rollbacks", meta_.rollbacks},
-       {"val_psnr", last_val_psnr_}});
-  if (dp_) dp_->WriteStats(options_.out_dir);
-  report.phase1_steps = meta_.phase1_step;
-  report.phase2_steps = meta_.phase2_step;
-  report.rollbacks = meta_.rollbacks;
-  report.stopped = stopped_;
-  report.val_psnr = last_val_psnr_;
-  report.checkpoint_path = checkpoint_path_;
-  report.log_path = options_.out_dir + "/train_log.jsonl";
-  return report;
+  TrainingRun run(config_, options_);
+  return run.Execute(train, val);
 }
 
 }  // namespace p2i::model

@@ -6,6 +6,7 @@
 #pragma once
 
 #include <functional>
+#include <limits>
 #include <memory>
 #include <string>
 
@@ -20,6 +21,9 @@ struct TrainerOptions {
   std::string out_dir;      ///< checkpoint.pt and train_log.jsonl go here (created if needed)
   int phase = 0;            ///< 0 = phase 1 then 2, 1 = phase 1 only, 2 = phase 2 only
   int steps = -1;           ///< >= 0: run to this many steps in each phase run (else the config's)
+  /// >= 0: phase 2's target step instead of `steps` (the trainer node runs phase 1 and 2 to
+  /// different step counts in one call).
+  int steps_phase2 = -1;
   int threads = 2;          ///< torch::set_num_threads
   /// Continue from out_dir/checkpoint.pt exactly. If that file is an inference checkpoint (an
   /// exported file copied there), this is a warm start from it instead (see init_from).
@@ -48,6 +52,9 @@ struct TrainReport {
   bool stopped = false;               ///< should_stop() ended the run early (checkpoint saved)
   double val_psnr = 0.0;              ///< last validation PSNR (dB, RGB), 0 if none
   double mean_image_val_psnr = 0.0;   ///< PSNR of predicting the mean training image
+  /// Last validation pose-dependence score (model/pose_dependence.h: 1 = varies like the scene,
+  /// 0 = one image for every pose); NaN if no validation ran.
+  double val_pose_dependence = std::numeric_limits<double>::quiet_NaN();
   std::string checkpoint_path;
   std::string log_path;
 };
@@ -71,25 +78,5 @@ class Trainer {
   P2iConfig config_;
   TrainerOptions options_;
 };
-
-/// What ExportInference wrote.
-struct ExportReport {
-  int64_t in_bytes = 0;
-  int64_t out_bytes = 0;
-  int64_t parameters = 0;  ///< G + ENET
-  int phase1_steps = 0;
-  int phase2_steps = 0;
-};
-
-/// Writes an inference checkpoint (atomically): the metadata (format version, config, pose
-/// normalisation, resolution, camera, steps) with G and ENET only; no D, optimiser or RNG state.
-/// LoadSynthesizer renders it exactly like the full checkpoint, and Trainer can warm-start from
-/// it (TrainerOptions::init_from). Throws std::runtime_error naming the file on a missing input,
-/// another format version or a write failure.
-ExportReport ExportInference(const std::string& in_checkpoint, const std::string& out_path);
-
-/// A procedural RGB-D scene for tests and `--data procedural`: a textured room seen from poses
-/// along a smooth loop, rendered analytically at `size` x `size` (no external renderer).
-scene::RgbdDataset MakeProceduralDataset(int num_frames, int size, uint64_t seed = 0);
 
 }  // namespace p2i::model

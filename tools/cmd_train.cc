@@ -9,6 +9,8 @@
 #include <CLI/CLI.hpp>
 
 #include "model/p2i_config.h"
+#include "model/pose_dependence.h"
+#include "model/procedural_dataset.h"
 #include "model/trainer.h"
 #include "scene/builtin_dataset.h"
 #include "scene/dataset_loader.h"
@@ -48,10 +50,13 @@ int Train(const model::P2iConfig& config, const scene::RgbdDataset& train,
   if (report.stopped)
     std::printf("stopped by signal: checkpoint saved at the current step (continue with --resume)\n");
   std::printf("trained '%s': phase 1 %d steps, phase 2 %d steps, rollbacks %d\n"
-              "validation PSNR %.2f dB (mean training image: %.2f dB)\ncheckpoint %s\nlog %s\n",
+              "validation PSNR %.2f dB (mean training image: %.2f dB), pose-dependence %.2f\n"
+              "checkpoint %s\nlog %s\n",
               config.name.c_str(), report.phase1_steps, report.phase2_steps, report.rollbacks,
-              report.val_psnr, report.mean_image_val_psnr, report.checkpoint_path.c_str(),
-              report.log_path.c_str());
+              report.val_psnr, report.mean_image_val_psnr, report.val_pose_dependence,
+              report.checkpoint_path.c_str(), report.log_path.c_str());
+  const std::string warning = model::PoseDependenceWarning(report.val_pose_dependence);
+  if (!warning.empty()) std::printf("%s\n", warning.c_str());
   return 0;
 }
 

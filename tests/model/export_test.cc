@@ -181,6 +181,8 @@ TEST_CASE("p2i export writes the inference checkpoint, reports sizes and --eval 
   CHECK(eval.find("on 4 frames") != std::string::npos);
   CHECK(eval.find("SSIM") != std::string::npos);
   CHECK(eval.find("nearest training frame PSNR") != std::string::npos);
+  CHECK(eval.find("depth warp (k 4, holes filled) PSNR") != std::string::npos);
+  CHECK(eval.find("pose-dependence ") != std::string::npos);
   const std::string bad = p2i::testing::RunCommand(
       p2i::testing::BinDir() + "/p2i export " + dir + "/nope.pt --out " + dir + "/x.pt 2>&1", &code);
   CHECK(code != 0);

@@ -17,6 +17,8 @@
   INTERNAL_CATCH_TEST("CHECK", Catch::ResultDisposition::ContinueOnFailure, __VA_ARGS__)
 
 #include "model/p2i_config.h"
+#include "model/export.h"
+#include "model/procedural_dataset.h"
 #include "model/trainer.h"
 #include "tests/temp_dir.h"
 #include "tests/tiny_config.h"

@@ -1,6 +1,8 @@
 /// @file networks_losses_test.cc
 /// @brief Shapes of G/D/ENET for several configs, spectral normalisation, and every P2I-NET loss
 /// on hand-made tensors (values, gradient flow, switches).
+#include <cmath>
+
 #include <catch2/catch.hpp>
 #include <torch/torch.h>
 
@@ -228,4 +230,36 @@ TEST_CASE("phase 2: ENET trains while the frozen G gets no gradient", "[unit]") 
   for (const auto& p : e->parameters())
     if (p.grad().defined()) enet_grad += p.grad().abs().sum().item<double>();
   CHECK(enet_grad > 0);
+}
+
+TEST_CASE("Fourier pose encoding: 7 (1 + 2 B) inputs, sin/cos of 2^k pi y; G takes it", "[unit]") {
+  const auto y = torch::tensor({{0.25f, -0.5f, 0.f, 0.f, 0.f, 0.f, 1.f}});
+  const auto e = EncodePose(y, 2);
+  REQUIRE(e.sizes() == torch::IntArrayRef({1, 35}));
+  CHECK(torch::equal(e.slice(1, 0, 7), y));
+  CHECK(e[0][7].item<float>() == Approx(std::sin(M_PI * 0.25)));       // sin(pi y0)
+  CHECK(e[0][14].item<float>() == Approx(std::cos(M_PI * 0.25)));      // cos(pi y0)
+  CHECK(e[0][22].item<float>() == Approx(std::sin(2 * M_PI * -0.5)).margin(1e-6));  // sin(2 pi y1)
+  CHECK(torch::equal(EncodePose(y, 0), y));
+  auto c = Tiny(32, true, "custom");
+  c.pose_encoding = "fourier";
+  c.fourier_bands = 3;
+  c.Validate();
+  CHECK(c.PoseInputs() == 49);
+  Generator g(c);
+  CHECK(g->fc1->weight.size(1) == 49);
+  CHECK(g->forward(torch::zeros({2, 7})).sizes() == torch::IntArrayRef({2, 4, 32, 32}));
+}
+
+TEST_CASE("reconstruction L1 and the R1 penalty values", "[unit]") {
+  const auto a = torch::tensor({{1.f, -1.f}, {0.5f, 0.f}});
+  const auto b = torch::zeros({2, 2});
+  CHECK(ReconstructionLoss(a, b).item<double>() == Approx(2.5 / 4));
+  // score = sum(w * x) per sample: its gradient w.r.t. x is w, so R1 = gamma / 2 * ||w||^2.
+  auto x = torch::randn({3, 1, 2, 2}).requires_grad_(true);
+  const auto w = torch::tensor({1.f, 2.f, -2.f, 0.f}).reshape({1, 1, 2, 2});
+  const auto score = (x * w).sum({1, 2, 3});
+  const auto r1 = R1Penalty(score, x, 10.0);
+  CHECK(r1.item<double>() == Approx(5.0 * 9.0));
+  CHECK(r1.requires_grad() == false);  // w is a constant here: no parameter to train
 }

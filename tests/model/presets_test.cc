@@ -36,6 +36,19 @@ TEST_CASE("every preset in model/presets parses and validates", "[unit]") {
   CHECK(row8.enet);
   CHECK(row8.GeneratorWidths().back() == 1024);
   CHECK(P2iConfig::FromYamlFile(dir + "/cnn_baseline.yaml").IsBaseline());
+  // The paper-literal presets keep every non-paper addition off.
+  for (const std::string name : {"default", "default_256", "ablation_row1_minimal",
+                                 "ablation_row8_full"}) {
+    INFO(name);
+    const auto p = P2iConfig::FromYamlFile(dir + "/" + name + ".yaml");
+    CHECK(p.recon_weight == 0.0);
+    CHECK(p.r1_gamma == 0.0);
+    CHECK(p.pose_encoding == "none");
+  }
+  // The learning recipe is a new preset with its deviations on.
+  const auto learn = P2iConfig::FromYamlFile(dir + "/learn_128.yaml");
+  CHECK(learn.resolution == 128);
+  CHECK(learn.recon_weight > 0.0);
 }
 
 TEST_CASE("config YAML: unknown keys and bad values are errors naming them", "[unit]") {
@@ -49,4 +62,15 @@ TEST_CASE("config YAML: unknown keys and bad values are errors naming them", "[u
   const auto back = P2iConfig::FromYamlString(c.ToYamlString(), "round trip");
   CHECK(back.ToYamlString() == c.ToYamlString());
   CHECK(back.k1 == 0.5);
+  CHECK_THROWS_WITH(P2iConfig::FromYamlString("pose_encoding: sine\n", "x.yaml"),
+                    Catch::Contains("pose_encoding"));
+  CHECK_THROWS_WITH(P2iConfig::FromYamlString("recon_weight: -1\n", "x.yaml"),
+                    Catch::Contains("recon_weight"));
+  const auto f = P2iConfig::FromYamlString(
+      "resolution: 32\ng_widths: [8, 8, 8, 8]\npose_encoding: fourier\nfourier_bands: 3\n"
+      "recon_weight: 10\nr1_gamma: 0.5\n", "x");
+  const auto f2 = P2iConfig::FromYamlString(f.ToYamlString(), "round trip");
+  CHECK(f2.PoseInputs() == 49);
+  CHECK(f2.recon_weight == 10.0);
+  CHECK(f2.r1_gamma == 0.5);
 }

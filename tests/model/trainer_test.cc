@@ -1,6 +1,7 @@
 /// @file trainer_test.cc
 /// @brief Checkpoints (round trip, version refusal, atomic write), exact resume, the divergence
 /// guard, the synthesizer, and a short end-to-end training run on procedural frames.
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -11,6 +12,7 @@
 
 #include "model/checkpoint.h"
 #include "model/p2i_synthesizer.h"
+#include "model/pose_dependence.h"
 #include "model/trainer.h"
 #include "tests/model/model_test_util.h"
 
@@ -154,6 +156,31 @@ TEST_CASE("the divergence guard rolls back on an injected NaN and lowers the LR"
   fs::remove_all(dir);
 }
 
+TEST_CASE("validation logs the pose-dependence score; recon_weight and fourier train", "[unit]") {
+  const auto dir = TempDir("posedep");
+  const auto data = MakeProceduralDataset(12, 32);
+  p2i::scene::RgbdDataset train = data, val = data;
+  train.frames.resize(8);
+  val.frames.erase(val.frames.begin(), val.frames.begin() + 8);
+  auto c = TinyConfig();
+  c.recon_weight = 10.0;
+  c.pose_encoding = "fourier";
+  c.fourier_bands = 2;
+  c.r1_gamma = 1.0;
+  c.Validate();
+  const auto report = Trainer(c, Quiet(dir, 5)).Run(train, val);
+  CHECK(std::isfinite(report.val_pose_dependence));
+  CHECK(report.val_pose_dependence >= 0.0);
+  const std::string log = ReadAll(report.log_path);
+  CHECK(log.find("\"pose_dependence\":") != std::string::npos);
+  CHECK(log.find("\"g_recon\":") != std::string::npos);
+  CHECK(log.find("\"d_r1\":") != std::string::npos);
+  // An untrained tiny G renders nearly one image: the warning event is logged.
+  if (report.val_pose_dependence < kPoseDependenceWarn)
+    CHECK(log.find("\"event\":\"warning\"") != std::string::npos);
+  fs::remove_all(dir);
+}
+
 TEST_CASE("the synthesizer renders RGB-D in metres with invalid depth 0", "[unit]") {
   const auto dir = TempDir("synth");
   const auto c = TinyConfig();
@@ -253,6 +280,8 @@ TEST_CASE("end to end: P2I-NET beats the mean image on held-out procedural frame
                                   << phase1.mean_image_val_psnr << " dB");
   CHECK(phase1.phase1_steps == 800);
   CHECK(phase1.val_psnr > phase1.mean_image_val_psnr + kPhase1MarginDb);
+  INFO("phase 1 pose-dependence " << phase1.val_pose_dependence);
+  CHECK(phase1.val_pose_dependence > kPoseDependenceWarn);
   o.phase = 2;
   const auto report = Trainer(c, o).Run(train, val);
   INFO("with ENET: val PSNR " << report.val_psnr << " dB, mean image " << report.mean_image_val_psnr

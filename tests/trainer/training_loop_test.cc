@@ -64,6 +64,11 @@ TEST_CASE("TrainingLoop: rounds on a growing buffer publish loadable, increasing
     CHECK(v.width() == 32);
     REQUIRE(std::filesystem::exists(v.checkpoint_path()));
     auto synth = model::LoadSynthesizer(v.checkpoint_path());
+    // ENET is trained online too: every version renders G + ENET ("g+enet" is refused for a
+    // checkpoint without phase-2 steps).
+    model::SynthesizerOptions with_enet;
+    with_enet.stage = "g+enet";
+    CHECK_NOTHROW(model::LoadSynthesizer(v.checkpoint_path(), with_enet));
     const auto view = synth->Render(sim.frames[5].pose);
     CHECK(view.rgb.cols == 32);
     CHECK(view.rgb.rows == 32);
