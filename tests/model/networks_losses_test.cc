@@ -232,7 +232,7 @@ TEST_CASE("phase 2: ENET trains while the frozen G gets no gradient", "[unit]") 
   CHECK(enet_grad > 0);
 }
 
-TEST_CASE("Fourier pose encoding: 7 (1 + 2 B) inputs, sin/cos of 2^k pi y; G takes it", "[unit]") {
+TEST_CASE("Fourier pose encoding: 7 (1 + 2 B) inputs, sin/cos of 2^k pi y, G takes it", "[unit]") {
   const auto y = torch::tensor({{0.25f, -0.5f, 0.f, 0.f, 0.f, 0.f, 1.f}});
   const auto e = EncodePose(y, 2);
   REQUIRE(e.sizes() == torch::IntArrayRef({1, 35}));

@@ -58,7 +58,7 @@ TEST_CASE("pose-dependence: constant output ~0, reproducing the ground truth 1, 
   CHECK(PoseDependenceWarning(exact.Score()).empty());
 }
 
-TEST_CASE("pose-dependence: undefined with < 2 views or a static scene; bad input refused",
+TEST_CASE("pose-dependence: undefined with < 2 views or a static scene, bad input refused",
           "[unit]") {
   const auto gt = Views(2);
   PoseDependence one;

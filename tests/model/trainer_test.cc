@@ -156,7 +156,7 @@ TEST_CASE("the divergence guard rolls back on an injected NaN and lowers the LR"
   fs::remove_all(dir);
 }
 
-TEST_CASE("validation logs the pose-dependence score; recon_weight and fourier train", "[unit]") {
+TEST_CASE("validation logs the pose-dependence score, and recon_weight, fourier and r1 train", "[unit]") {
   const auto dir = TempDir("posedep");
   const auto data = MakeProceduralDataset(12, 32);
   p2i::scene::RgbdDataset train = data, val = data;
