@@ -9,7 +9,9 @@
 #include <torch/torch.h>
 
 #include "model/checkpoint.h"
+#include "model/export.h"
 #include "model/p2i_synthesizer.h"
+#include "model/procedural_dataset.h"
 #include "model/trainer.h"
 #include "tests/checkpoint_tamper.h"
 #include "tests/model/model_test_util.h"

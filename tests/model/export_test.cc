@@ -8,7 +8,9 @@
 #include <torch/torch.h>
 
 #include "model/checkpoint.h"
+#include "model/export.h"
 #include "model/p2i_synthesizer.h"
+#include "model/procedural_dataset.h"
 #include "model/trainer.h"
 #include "tests/model/model_test_util.h"
 #include "tests/process_util.h"

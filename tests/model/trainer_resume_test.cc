@@ -10,7 +10,9 @@
 #include "model/checkpoint.h"
 #include "model/networks.h"
 #include "model/p2i_config.h"
+#include "model/export.h"
 #include "model/p2i_synthesizer.h"
+#include "model/procedural_dataset.h"
 #include "model/trainer.h"
 #include "tests/model/model_test_util.h"
 

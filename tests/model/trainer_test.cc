@@ -13,6 +13,7 @@
 #include "model/checkpoint.h"
 #include "model/p2i_synthesizer.h"
 #include "model/pose_dependence.h"
+#include "model/procedural_dataset.h"
 #include "model/trainer.h"
 #include "tests/model/model_test_util.h"
 
