@@ -14,8 +14,6 @@
 #include "convert/depth.h"
 #include "convert/image.h"
 #include "convert/pose.h"
-#include "model/baseline_warp.h"
-#include "model/coverage.h"
 #include "model/metrics.h"
 #include "scene/image_ops.h"
 #include "util/json_number.h"
@@ -56,6 +54,7 @@ MonitorNode::MonitorNode(const runtime::NodeArgs& args) : Node("monitor", args) 
   }
   // The camera node's default sim camera.
   sim_camera_ = scene::SimScene::DefaultCamera(width, height);
+  baselines_.emplace(&*sim_, sim_camera_);
   lpips_ = model::LpipsSqueeze::TryLoad(lpips_path, &lpips_status_);
   if (lpips_) {
     lpips_status_ = "LPIPS-Squeeze from " + lpips_->weights_path();
@@ -65,7 +64,7 @@ MonitorNode::MonitorNode(const runtime::NodeArgs& args) : Node("monitor", args) 
   views_sub_ = Subscribe<msgs::View>("views", [this](const msgs::View& v) { OnView(v); });
   frames_sub_ = Subscribe<msgs::RgbdFrame>("rgbd", [this](const msgs::RgbdFrame& f) {
     ++frames_captured_;
-    if (f.meta.has_pose()) keyframe_poses_.push_back(convert::FromMsg(f.meta.pose()));
+    if (f.meta.has_pose()) baselines_->AddKeyframe(convert::FromMsg(f.meta.pose()));
   });
   versions_sub_ = Subscribe<msgs::pb::ModelVersion>(
       "model_version",
@@ -100,48 +99,13 @@ void MonitorNode::OnView(const msgs::View& view) {
   }
   const model::DepthErrors de = model::ComputeDepthErrors(depth, truth.depth);
   if (std::isfinite(de.abs_rel)) depth_absrel_.push_back(de.abs_rel);
-  ScoreBaselines(convert::FromMsg(view.meta.pose()), truth);
+  if (const auto b = baselines_->Score(convert::FromMsg(view.meta.pose()), truth)) {
+    nearest_psnr_.push_back(b->nearest_psnr);
+    nearest_ssim_.push_back(b->nearest_ssim);
+    warp_psnr_.push_back(b->warp_psnr);
+    warp_ssim_.push_back(b->warp_ssim);
+  }
   ++views_scored_;
-}
-
-const scene::RgbdSample& MonitorNode::Keyframe(size_t i, int w, int h) {
-  if (w != keyframe_w_ || h != keyframe_h_) {
-    keyframe_cache_.clear();
-    keyframe_w_ = w;
-    keyframe_h_ = h;
-  }
-  auto it = keyframe_cache_.find(i);
-  if (it == keyframe_cache_.end()) {
-    scene::RgbdSample s = sim_->Render(keyframe_poses_[i], sim_camera_);
-    s.pose = keyframe_poses_[i];
-    s.id = "keyframe_" + std::to_string(i);
-    it = keyframe_cache_.emplace(i, scene::CenterCropResizeSample(s, w, h)).first;
-  }
-  return it->second;
-}
-
-void MonitorNode::ScoreBaselines(const scene::Pose& pose, const scene::RgbdSample& truth) {
-  if (keyframe_poses_.empty()) return;
-  constexpr double kMetresPerDegree = 0.5 * M_PI / 180.0;  // 0.5 m per radian
-  constexpr size_t kWarpFrames = 4;
-  std::vector<std::pair<double, size_t>> by_distance;
-  by_distance.reserve(keyframe_poses_.size());
-  for (size_t i = 0; i < keyframe_poses_.size(); ++i)
-    by_distance.push_back(
-        {model::CombinedPoseDistance(pose, keyframe_poses_[i], kMetresPerDegree), i});
-  const size_t k = std::min(kWarpFrames, by_distance.size());
-  std::partial_sort(by_distance.begin(), by_distance.begin() + k, by_distance.end());
-  const int w = truth.rgb.cols, h = truth.rgb.rows;
-  nearest_psnr_.push_back(model::Psnr(Keyframe(by_distance[0].second, w, h).rgb, truth.rgb));
-  scene::RgbdDataset sources;
-  sources.camera = scene::CenterCropResizeCamera(sim_camera_, w, h);
-  for (size_t j = 0; j < k; ++j) sources.frames.push_back(Keyframe(by_distance[j].second, w, h));
-  model::DepthWarpOptions o;
-  o.k = static_cast<int>(k);
-  o.metres_per_degree = kMetresPerDegree;
-  o.fill_holes = true;
-  model::DepthWarp warp(std::move(sources), o);
-  warp_psnr_.push_back(model::Psnr(warp.Render(pose).rgb, truth.rgb));
 }
 
 std::string MonitorNode::SummaryText() const {
@@ -165,7 +129,10 @@ std::string MonitorNode::SummaryText() const {
                 "warp %.2f)\n",
                 Median(psnr_), Median(nearest_psnr_), Median(warp_psnr_));
   os << line;
-  std::snprintf(line, sizeof(line), "SSIM (median):             %.3f\n", Median(ssim_));
+  std::snprintf(line, sizeof(line),
+                "SSIM (median):             %.3f   (same poses: nearest keyframe %.3f, depth "
+                "warp %.3f)\n",
+                Median(ssim_), Median(nearest_ssim_), Median(warp_ssim_));
   os << line;
   if (lpips_) {
     std::snprintf(line, sizeof(line), "LPIPS-Squeeze (median):    %.3f\n", Median(lpips_values_));
@@ -208,6 +175,8 @@ void MonitorNode::Finish() {
     j["nearest_keyframe_psnr_db_median"] = NumberOrNull(Median(nearest_psnr_));
     j["depth_warp_psnr_db_median"] = NumberOrNull(Median(warp_psnr_));
     j["ssim_median"] = NumberOrNull(Median(ssim_));
+    j["nearest_keyframe_ssim_median"] = NumberOrNull(Median(nearest_ssim_));
+    j["depth_warp_ssim_median"] = NumberOrNull(Median(warp_ssim_));
     j["lpips_squeeze_median"] = lpips_ ? NumberOrNull(Median(lpips_values_)) : nullptr;
     j["depth_absrel_median"] = NumberOrNull(Median(depth_absrel_));
     j["sequence_dir"] = sequence_dir_;

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "model/lpips.h"
+#include "nodes/monitor/keyframe_baselines.h"
 #include "nodes/runtime/node.h"
 #include "scene/camera_info.h"
 #include "scene/sim_scene.h"
@@ -24,11 +25,9 @@ namespace p2i::nodes {
 /// run. The ground truth is rendered with the sim camera and centre-cropped/resized to each
 /// view's size: the same path the training frames take.
 ///
-/// Beside the served views it scores the two free baselines on the same poses, so the summary
-/// shows what P2I-NET has to beat: the nearest keyframe and the depth warp (4 nearest keyframes,
-/// holes filled), whose keyframes are the frames captured so far (their poses, from `rgbd`,
-/// rendered exactly by the sim scene at the view's size, i.e. what the sim camera delivered and
-/// the trainer trained on; pose distance |dt| + 0.5 m per radian).
+/// Beside the served views it scores the two free baselines on the same poses (PSNR, SSIM), so
+/// the summary shows what P2I-NET has to beat: the nearest keyframe and the depth warp of the
+/// frames captured so far (KeyframeBaselines).
 /// Thread-compatible: everything runs on the node's executor thread.
 class MonitorNode : public runtime::Node {
  public:
@@ -39,10 +38,6 @@ class MonitorNode : public runtime::Node {
 
  private:
   void OnView(const msgs::View& view);
-  /// Nearest-keyframe and depth-warp RGB PSNR at `pose` for a view of `truth`'s size.
-  void ScoreBaselines(const scene::Pose& pose, const scene::RgbdSample& truth);
-  /// The sim frame at keyframe i, at w x h (cached for the last size asked).
-  const scene::RgbdSample& Keyframe(size_t i, int w, int h);
   void Finish();
   std::string SummaryText() const;
 
@@ -65,10 +60,8 @@ class MonitorNode : public runtime::Node {
   std::set<uint64_t> versions_served_;
   std::vector<double> psnr_, ssim_, lpips_values_, depth_absrel_, latency_ms_, render_ms_;
   std::vector<double> coverage_;
-  std::vector<scene::Pose> keyframe_poses_;
-  std::map<size_t, scene::RgbdSample> keyframe_cache_;
-  int keyframe_w_ = 0, keyframe_h_ = 0;
-  std::vector<double> nearest_psnr_, warp_psnr_;
+  std::optional<KeyframeBaselines> baselines_;  ///< after sim_ (points to it)
+  std::vector<double> nearest_psnr_, nearest_ssim_, warp_psnr_, warp_ssim_;
   std::shared_ptr<runtime::RawSubscriber> views_sub_, frames_sub_, versions_sub_;
 };
 
