@@ -9,6 +9,7 @@
 
 #include <catch2/catch.hpp>
 
+#include "eval/report.h"
 #include "eval/results.h"
 
 namespace fs = std::filesystem;
@@ -34,6 +35,7 @@ ResultRow Row(const std::string& method, int seed, double lpips) {
   r.lpips = lpips;
   r.views_per_s = 50;
   r.params = 920000;
+  r.pose_dependence = method == "p2i" ? 0.875 : NAN;
   r.views = {{"seq-01/000100", 21.0, 0.6, lpips, 0.9}};
   return r;
 }
@@ -61,6 +63,9 @@ TEST_CASE("ResultsStore writes one CSV/JSON row per completed combination, NA fo
   CHECK(header.find("lpips_squeeze") != std::string::npos);
   CHECK(header.find("latency_p99_ms") != std::string::npos);
   CHECK(header.find("flops_per_view") != std::string::npos);
+  CHECK(header.substr(header.rfind(',') + 1) == "pose_dependence");
+  CHECK(l1.substr(l1.rfind(',') + 1) == "NA");  // nearest: not computed
+  CHECK(l2.substr(l2.rfind(',') + 1) == "0.875");
   CHECK(l1.rfind("nearest,nearest,a3,r128,128,1,", 0) == 0);
   CHECK(l1.find(",NA,") != std::string::npos);
   CHECK(l2.find(",0.2,") != std::string::npos);
@@ -75,6 +80,8 @@ TEST_CASE("ResultsStore writes one CSV/JSON row per completed combination, NA fo
   CHECK(std::isnan(rows[0].lpips));
   CHECK(rows[1].lpips == Approx(0.20));
   CHECK(rows[1].params == Approx(920000));
+  CHECK(std::isnan(rows[0].pose_dependence));
+  CHECK(rows[1].pose_dependence == Approx(0.875));
   REQUIRE(rows[1].views.size() == 1);
   CHECK(rows[1].views[0].coverage == Approx(0.9));
   CHECK(Slurp(dir / "results.json").find("\"lpips_squeeze\": null") != std::string::npos);
@@ -93,4 +100,18 @@ TEST_CASE("ResultsStore writes one CSV/JSON row per completed combination, NA fo
     CHECK(std::string(e.what()).find("results.json") != std::string::npos);
   }
   fs::remove_all(dir);
+}
+
+TEST_CASE("the bench report has a pose-dep column and marks a collapsed row", "[unit]") {
+  ReportInputs in;
+  ResultRow learned = Row("p2i", 1, 0.2);
+  learned.pose_dependence = 0.83;
+  ResultRow collapsed = Row("p2i", 2, 0.3);
+  collapsed.pose_dependence = 0.12;
+  in.chart_inputs.rows = {Row("nearest", 1, NAN), learned, collapsed};
+  const std::string md = RenderReportMarkdown(in);
+  CHECK(md.find("| rho | pose-dep |") != std::string::npos);
+  CHECK(md.find("| 0.83 |") != std::string::npos);
+  CHECK(md.find("| 0.12 (collapsed) |") != std::string::npos);
+  CHECK(md.find("(collapsed)") == md.rfind("(collapsed)"));  // only the collapsed row
 }

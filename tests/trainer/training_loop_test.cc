@@ -1,6 +1,8 @@
 /// @file training_loop_test.cc
 /// @brief TrainingLoop on sim frames with a tiny model: versions come out in order, each a
 /// loadable checkpoint, and the buffer persists.
+#include <cmath>
+
 #include <catch2/catch.hpp>
 
 #include <filesystem>
@@ -55,6 +57,10 @@ TEST_CASE("TrainingLoop: rounds on a growing buffer publish loadable, increasing
     while (!loop.Finished()) std::this_thread::sleep_for(std::chrono::milliseconds(50));
     REQUIRE(loop.Error() == "");
     CHECK(buffer.Size() == 40);
+    // The last version's validation pose-dependence (the trainer node's val_pose_dependence;
+    // -1 = never measured).
+    CHECK(loop.LastPoseDependence() >= 0.0);
+    CHECK(std::isfinite(loop.LastPoseDependence()));
   }
   REQUIRE(versions.size() == 3);
   for (size_t i = 0; i < versions.size(); ++i) {
