@@ -14,8 +14,9 @@
 /// and fakes, Adam, and apart: self-attention and the spectral-norm power iterations).
 ///
 /// usage: model_bench [--threads N] [--out results.csv] [--quick] [--infer-only] [--presets DIR]
-///                    [--only NAME] [--profile NAME]
-/// (--infer-only skips the training-step timings, reported as 0; --only times one row)
+///                    [--only NAME] [--profile NAME] [--no-freeze]
+/// (--infer-only skips the training-step timings, reported as 0; --only times one row;
+/// --no-freeze times the G step with D's weight gradients computed, as before FrozenScope)
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -86,6 +87,7 @@ int main(int argc, char** argv) {
   int threads = 2;
   bool quick = false;
   bool infer_only = false;
+  bool freeze_d = true;
   std::string out = "model_bench.csv";
   std::string presets = std::string(P2I_SOURCE_DIR_BENCH) + "/model/presets";
   std::string only, profile;
@@ -98,9 +100,10 @@ int main(int argc, char** argv) {
     else if (a == "--profile" && i + 1 < argc) profile = argv[++i];
     else if (a == "--quick") quick = true;
     else if (a == "--infer-only") infer_only = true;
+    else if (a == "--no-freeze") freeze_d = false;
     else {
       std::fprintf(stderr, "usage: model_bench [--threads N] [--out CSV] [--quick] [--infer-only] "
-                           "[--presets DIR] [--only NAME] [--profile NAME]\n");
+                           "[--presets DIR] [--only NAME] [--profile NAME] [--no-freeze]\n");
       return 1;
     }
   }
@@ -113,13 +116,12 @@ int main(int argc, char** argv) {
   if (!profile.empty()) {
     const auto config = model::P2iConfig::FromYamlFile(presets + "/" + profile + ".yaml");
     const int steps = quick ? 3 : 8;
-    std::vector<double> rates;
     model::StepProfile p;
-    const double rate = RateAround(threads, [&] { p = model::ProfileTrainingStep(config, steps, threads); });
+    const double rate = RateAround(threads, [&] { p = model::ProfileTrainingStep(config, steps, threads, freeze_d); });
     const double flops = model::TrainingStepFlops(config, 1);
-    std::printf("phase-1 step of %s (%dx%d, batch %d) on %d threads, mean of %d steps:\n",
+    std::printf("phase-1 step of %s (%dx%d, batch %d) on %d threads, mean of %d steps%s:\n",
                 profile.c_str(), config.resolution, config.resolution, config.batch_size, threads,
-                steps);
+                steps, freeze_d ? "" : " (--no-freeze: D not frozen in the G step)");
     for (const auto& [name, sec] : p.sections)
       std::printf("  %-48s %9.1f ms %5.1f %%\n", name.c_str(), sec * 1e3,
                   name.rfind("(apart)", 0) == 0 ? 0.0 : 100.0 * sec / p.total);
@@ -162,10 +164,10 @@ int main(int argc, char** argv) {
     const double p50 = ms[ms.size() / 2], p99 = ms[std::min(ms.size() - 1, ms.size() * 99 / 100)];
     const double flops = synth->FlopsPerView();
     const double infer_ratio = (p50 / 1e3) / (flops / infer_rate);
-    const int steps = quick ? 2 : 5;
+    const int steps = quick ? 3 : 5;  // odd: the median is one measured step
     double t1 = 0.0, t2 = 0.0, rate1 = 0.0, rate2 = 0.0;
     if (!infer_only) {
-      rate1 = RateAround(threads, [&] { t1 = model::TimeTrainingStep(row.config, 1, steps, threads); });
+      rate1 = RateAround(threads, [&] { t1 = model::TimeTrainingStep(row.config, 1, steps, threads, freeze_d); });
       if (model::TrainingStepFlops(row.config, 2) > 0)
         rate2 = RateAround(threads, [&] { t2 = model::TimeTrainingStep(row.config, 2, steps, threads); });
     }

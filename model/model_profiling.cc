@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <optional>
 
 #include <torch/torch.h>
 
@@ -54,7 +55,8 @@ double MeasureMatmulFlopRate(int n, int threads, int reps) {
   return 2.0 * n * static_cast<double>(n) * n / best;
 }
 
-double TimeTrainingStep(const P2iConfig& config, int phase, int steps, int threads) {
+double TimeTrainingStep(const P2iConfig& config, int phase, int steps, int threads,
+                        bool freeze_d) {
   torch::set_num_threads(threads);
   torch::manual_seed(config.seed);
   Networks nets(config);
@@ -90,6 +92,8 @@ double TimeTrainingStep(const P2iConfig& config, int phase, int steps, int threa
       opt_d->zero_grad();
       dl.total.backward();
       opt_d->step();
+      std::optional<FrozenScope> frozen_d;  // as the trainer's G step
+      if (freeze_d) frozen_d.emplace(*nets.d);
       auto gl = GeneratorLoss(nets.d->forward(fake), nets.d->MapPose(y), y, w);
       opt_g.zero_grad();
       gl.total.backward();
@@ -97,12 +101,18 @@ double TimeTrainingStep(const P2iConfig& config, int phase, int steps, int threa
     }
   };
   step();
-  const auto t0 = Clock::now();
-  for (int i = 0; i < steps; ++i) step();
-  return Seconds(t0, Clock::now()) / std::max(1, steps);
+  std::vector<double> times;
+  for (int i = 0; i < std::max(1, steps); ++i) {
+    const auto t0 = Clock::now();
+    step();
+    times.push_back(Seconds(t0, Clock::now()));
+  }
+  std::sort(times.begin(), times.end());
+  return times[times.size() / 2];
 }
 
-StepProfile ProfileTrainingStep(const P2iConfig& config, int steps, int threads) {
+StepProfile ProfileTrainingStep(const P2iConfig& config, int steps, int threads,
+                                bool freeze_d) {
   torch::set_num_threads(threads);
   torch::manual_seed(config.seed);
   StepProfile out;
@@ -139,12 +149,16 @@ StepProfile ProfileTrainingStep(const P2iConfig& config, int steps, int threads)
     lap();
     opt_d.step();
     lap();
-    auto dg = nets.d->forward(fake);
-    lap();
-    auto gl = GeneratorLoss(dg, nets.d->MapPose(y), y, w);
-    opt_g.zero_grad();
-    gl.total.backward();
-    lap();
+    {
+      std::optional<FrozenScope> frozen_d;  // as the trainer's G step
+      if (freeze_d) frozen_d.emplace(*nets.d);
+      auto dg = nets.d->forward(fake);
+      lap();
+      auto gl = GeneratorLoss(dg, nets.d->MapPose(y), y, w);
+      opt_g.zero_grad();
+      gl.total.backward();
+      lap();
+    }
     opt_g.step();
     lap();
     if (i == 0) continue;  // warm-up

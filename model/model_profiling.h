@@ -14,9 +14,12 @@ namespace p2i::model {
 /// FLOP/s of an n x n float matmul on `threads` LibTorch threads (best of `reps`).
 double MeasureMatmulFlopRate(int n, int threads, int reps = 5);
 
-/// Mean wall time (seconds) of one training step of `phase` (1: D + G step, or the baseline's
-/// regression step; 2: ENET step) at config.batch_size on random data, after one warm-up step.
-double TimeTrainingStep(const P2iConfig& config, int phase, int steps, int threads);
+/// Median wall time (seconds) of one training step of `phase` (1: D + G step, or the baseline's
+/// regression step; 2: ENET step) at config.batch_size on random data, over `steps` steps
+/// after one warm-up step. The G step runs with D frozen (model::FrozenScope), as the trainer's;
+/// `freeze_d = false` times it as before that change (D's weight gradients computed too).
+double TimeTrainingStep(const P2iConfig& config, int phase, int steps, int threads,
+                        bool freeze_d = true);
 
 /// Where the time of one phase-1 (G + D) step goes, in seconds per step (mean over `steps`
 /// after a warm-up step), each section synchronous (CPU): G forward; D forward on the reals and
@@ -28,7 +31,8 @@ struct StepProfile {
   std::vector<std::pair<std::string, double>> sections;
   double total = 0.0;  ///< sum of the step's own sections (without the two apart)
 };
-StepProfile ProfileTrainingStep(const P2iConfig& config, int steps, int threads);
+StepProfile ProfileTrainingStep(const P2iConfig& config, int steps, int threads,
+                                bool freeze_d = true);
 
 /// Multiply-accumulate FLOPs (2 x MACs) of one training step: forward + backward ~ 3x forward
 /// of every network the step runs, times the batch size.

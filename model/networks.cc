@@ -258,4 +258,16 @@ int64_t CountParameters(const torch::nn::Module& module) {
   return n;
 }
 
+FrozenScope::FrozenScope(torch::nn::Module& module) {
+  for (auto& p : module.parameters()) {
+    if (!p.requires_grad()) continue;
+    p.requires_grad_(false);
+    frozen_.push_back(p);
+  }
+}
+
+FrozenScope::~FrozenScope() {
+  for (auto& p : frozen_) p.requires_grad_(true);
+}
+
 }  // namespace p2i::model

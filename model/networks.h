@@ -124,4 +124,19 @@ TORCH_MODULE(Enhancer);
 
 int64_t CountParameters(const torch::nn::Module& module);
 
+/// For its scope, the parameters of `module` do not require gradients (restored on exit): a
+/// frozen network inside another network's step, e.g. D in G's step. Gradients still flow
+/// *through* it to the trained network's output, unchanged; only its own weight gradients,
+/// which that step would discard, are not computed.
+class FrozenScope {
+ public:
+  explicit FrozenScope(torch::nn::Module& module);
+  ~FrozenScope();
+  FrozenScope(const FrozenScope&) = delete;
+  FrozenScope& operator=(const FrozenScope&) = delete;
+
+ private:
+  std::vector<torch::Tensor> frozen_;
+};
+
 }  // namespace p2i::model

@@ -414,16 +414,21 @@ StepOutcome TrainingRun::AdversarialStep(int step, const torch::Tensor& real,
   dl.total.backward();
   if (dp_) dp_->AverageGradients(*opt_d_);
   opt_d_->step();
-  // G step through the updated D (D's grads are discarded: only opt_g steps).
-  auto gl = GeneratorLoss(d->forward(fake), d->MapPose(y), y, w);
+  // G step through the updated D, frozen: only opt_g steps, so D's weight gradients are not
+  // computed (the same G gradients; model_bench --profile shows the saving).
+  GeneratorLossTerms gl;
   torch::Tensor recon;
-  if (config_.recon_weight > 0) {
-    recon = ReconstructionLoss(fake, real);
-    gl.total = gl.total + config_.recon_weight * recon;
+  {
+    FrozenScope frozen_d(*d);
+    gl = GeneratorLoss(d->forward(fake), d->MapPose(y), y, w);
+    if (config_.recon_weight > 0) {
+      recon = ReconstructionLoss(fake, real);
+      gl.total = gl.total + config_.recon_weight * recon;
+    }
+    CheckLoss(gl.total, "L_G", step);
+    opt_g_->zero_grad();
+    gl.total.backward();
   }
-  CheckLoss(gl.total, "L_G", step);
-  opt_g_->zero_grad();
-  gl.total.backward();
   if (dp_) dp_->AverageGradients(*opt_g_);
   opt_g_->step();
   if (nets_->g_ema) UpdateEma();

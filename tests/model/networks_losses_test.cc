@@ -2,6 +2,7 @@
 /// @brief Shapes of G/D/ENET for several configs, spectral normalisation, and every P2I-NET loss
 /// on hand-made tensors (values, gradient flow, switches).
 #include <cmath>
+#include <optional>
 
 #include <catch2/catch.hpp>
 #include <torch/torch.h>
@@ -262,4 +263,44 @@ TEST_CASE("reconstruction L1 and the R1 penalty values", "[unit]") {
   const auto r1 = R1Penalty(score, x, 10.0);
   CHECK(r1.item<double>() == Approx(5.0 * 9.0));
   CHECK(r1.requires_grad() == false);  // w is a constant here: no parameter to train
+}
+
+TEST_CASE("G step with D frozen (FrozenScope): the same G gradients, no D weight gradients",
+          "[unit]") {
+  const auto c = Tiny(32, true, "custom");
+  torch::manual_seed(3);
+  Generator g(c);
+  Discriminator d(c);
+  const LossWeights w = LossWeights::From(c);
+  const auto y = torch::rand({2, 7}) * 2 - 1;
+  // The SN power iteration updates D's u vectors in every forward: both passes start from the
+  // same buffers so they see the same D.
+  std::vector<torch::Tensor> buffers;
+  for (const auto& b : d->buffers()) buffers.push_back(b.clone());
+  auto restore_buffers = [&] {
+    torch::NoGradGuard ng;
+    size_t i = 0;
+    for (auto& b : d->buffers()) b.copy_(buffers[i++]);
+  };
+  auto run = [&](bool freeze) {
+    restore_buffers();
+    g->zero_grad();
+    d->zero_grad();
+    std::optional<FrozenScope> frozen;
+    if (freeze) frozen.emplace(*d);
+    auto gl = GeneratorLoss(d->forward(g->forward(y)), d->MapPose(y), y, w);
+    gl.total.backward();
+    std::vector<torch::Tensor> out;
+    for (const auto& p : g->parameters()) out.push_back(p.grad().clone());
+    bool d_grad = false;
+    for (const auto& p : d->parameters())
+      d_grad |= p.grad().defined() && p.grad().abs().sum().item<double>() > 0;
+    CHECK(d_grad == !freeze);
+    return out;
+  };
+  const auto plain = run(false);
+  const auto frozen = run(true);
+  REQUIRE(plain.size() == frozen.size());
+  for (size_t i = 0; i < plain.size(); ++i) CHECK(torch::allclose(plain[i], frozen[i], 1e-5, 1e-6));
+  for (const auto& p : d->parameters()) CHECK(p.requires_grad());  // restored
 }
