@@ -13,6 +13,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "model/coverage.h"
+#include "model/push_pull_fill.h"
 #include "scene/strict_yaml_reader.h"
 
 namespace p2i::model {
@@ -57,40 +58,6 @@ Warped WarpOne(const scene::RgbdSample& src, const scene::CameraInfo& src_cam,
     }
   }
   return w;
-}
-
-/// Push-pull hole filling (Gortler et al. 1996): average the valid pixels down a pyramid, then
-/// fill each level's holes from the upsampled coarser level. `valid` is CV_8UC1 (non-zero =
-/// keep); `image` is CV_32FC1 and is filled in place (single channel: OpenCV's MatExpr scalar
-/// arithmetic does not reliably broadcast over channels). No OpenCV photo module needed.
-void PushPullFill(cv::Mat& image, const cv::Mat& valid) {
-  cv::Mat weight;
-  valid.convertTo(weight, CV_32F, 1.0 / 255.0);
-  std::vector<cv::Mat> premult{image.mul(weight)}, weights{weight};
-  while (premult.back().cols > 1 || premult.back().rows > 1) {
-    const cv::Size next((premult.back().cols + 1) / 2, (premult.back().rows + 1) / 2);
-    cv::Mat p, w;
-    cv::resize(premult.back(), p, next, 0, 0, cv::INTER_AREA);
-    cv::resize(weights.back(), w, next, 0, 0, cv::INTER_AREA);
-    premult.push_back(p);
-    weights.push_back(w);
-  }
-  // Top level: normalised average of everything valid.
-  cv::Mat filled;
-  cv::divide(premult.back(), cv::max(weights.back(), 1e-12), filled);
-  for (int l = static_cast<int>(premult.size()) - 2; l >= 0; --l) {
-    cv::Mat up;
-    cv::resize(filled, up, premult[static_cast<size_t>(l)].size(), 0, 0, cv::INTER_LINEAR);
-    cv::Mat level;
-    cv::divide(premult[static_cast<size_t>(l)], cv::max(weights[static_cast<size_t>(l)], 1e-12),
-               level);
-    // Where a level has (partial) valid support keep its own average, blended by its weight.
-    const cv::Mat& w = weights[static_cast<size_t>(l)];
-    cv::Mat wc = cv::min(w, 1.0);
-    cv::Mat one_minus = 1.0 - wc;
-    filled = level.mul(wc) + up.mul(one_minus);
-  }
-  filled.copyTo(image, ~valid);
 }
 
 }  // namespace
@@ -202,17 +169,7 @@ scene::RgbdSample DepthWarp::Render(const scene::Pose& pose) {
     }
   }
   last_hole_fraction_ = static_cast<double>(hole_count) / static_cast<double>(h * w);
-  if (options_.fill_holes && hole_count > 0 && hole_count < static_cast<int64_t>(h) * w) {
-    const cv::Mat valid = ~holes;
-    cv::Mat rgb_f;
-    out.rgb.convertTo(rgb_f, CV_32FC3);
-    std::vector<cv::Mat> channels;
-    cv::split(rgb_f, channels);
-    for (auto& ch : channels) PushPullFill(ch, valid);
-    cv::merge(channels, rgb_f);
-    rgb_f.convertTo(out.rgb, CV_8UC3);
-    PushPullFill(out.depth, valid);
-  }
+  if (options_.fill_holes) PushPullFillRgbd(out.rgb, out.depth, ~holes);
   return out;
 }
 

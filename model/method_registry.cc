@@ -6,6 +6,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include "fusion/fusion_methods.h"
 #include "model/baseline_nearest.h"
 #include "model/baseline_warp.h"
 #include "model/p2i_synthesizer.h"
@@ -74,6 +75,11 @@ std::vector<MethodInfo> MakeTable() {
                "", {"metres_per_degree"}, ConfigureNearest});
   t.push_back({"warp", {}, "depth warp (DIBR) of the k nearest training frames", false, "", "",
                {"k", "metres_per_degree", "z_tolerance", "fill_holes"}, ConfigureWarp});
+  t.push_back({"fusion", {}, "TSDF geometry (raycast) coloured by view-dependent blending of the k "
+               "best visible keyframes (fusion/)", false, "", "", fusion::FusionOptionKeys(),
+               fusion::ConfigureFusion});
+  t.push_back({"open3d_tsdf", {}, "Open3D's own voxel-colour raycast of the same TSDF (fusion/)",
+               false, "", "", fusion::FusionOptionKeys(), fusion::ConfigureOpen3dTsdf});
   return t;
 }
 

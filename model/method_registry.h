@@ -6,7 +6,8 @@
 ///
 /// Adding a method: write its ViewSynthesizer (model/ or a folder of its own), then add one
 /// entry to the table in model/method_registry.cc (name, summary, learned or not, its option
-/// keys and a Configure function). Nothing else lists method names.
+/// keys and a Configure function). Nothing else lists method names. Built as p2i_methods (not
+/// p2i_model: the table also lists methods of libraries above p2i_model, e.g. p2i_fusion).
 #pragma once
 
 #include <functional>
@@ -40,7 +41,7 @@ using MethodFactory = std::function<std::unique_ptr<ViewSynthesizer>(const Metho
 
 /// One synthesis method.
 struct MethodInfo {
-  std::string name;                  ///< the canonical name: "p2i", "cnn", "nearest", "warp"
+  std::string name;                  ///< the canonical name: "p2i", "cnn", "nearest", "warp", "fusion"
   std::vector<std::string> aliases;  ///< other spellings accepted in configs ("p2i_net")
   std::string summary;               ///< one line, for help texts and docs
   /// Learned methods are trained by model::Trainer from a P2iConfig preset (`default_preset`

@@ -1,0 +1,26 @@
+/// @file fusion_methods.h
+/// @brief The registry entries of this library's methods (model/method_registry.cc lists them):
+/// how `fusion` and `open3d_tsdf` read their options and build over the training frames.
+#pragma once
+
+#include <string>
+
+#include "model/method_registry.h"
+
+namespace YAML {
+class Node;
+}  // namespace YAML
+
+namespace p2i::fusion {
+
+/// The option keys of both methods (FusionOptions::FromYaml): tsdf, blend, fill_holes.
+const std::vector<std::string>& FusionOptionKeys();
+
+/// Read {tsdf: {...}, blend: {...}, fill_holes: bool} (null = defaults, fill_holes on), check
+/// them once (bad keys or values throw std::runtime_error naming `source`, the line and the key)
+/// and return a factory building `fusion` (TSDF + keyframe blending) or `open3d_tsdf` (Open3D's
+/// voxel-colour raycast of the same TSDF) over MethodInputs::training, all frames integrated.
+model::MethodFactory ConfigureFusion(const YAML::Node& options, const std::string& source);
+model::MethodFactory ConfigureOpen3dTsdf(const YAML::Node& options, const std::string& source);
+
+}  // namespace p2i::fusion

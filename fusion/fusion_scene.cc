@@ -1,0 +1,289 @@
+/// @file fusion_scene.cc
+/// @brief TSDF raycast + per-pixel visibility-tested, view-dependent keyframe blending.
+#include "fusion/fusion_scene.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <stdexcept>
+#include <utility>
+
+#include <yaml-cpp/yaml.h>
+
+#include <Eigen/Geometry>
+
+#include "model/coverage.h"
+#include "scene/strict_yaml_reader.h"
+
+namespace p2i::fusion {
+namespace {
+
+constexpr double kRadToDeg = 57.29577951308232;
+
+/// Bilinear RGB sample of a CV_8UC3 image at (x, y) in pixel coordinates, in [0, 1]; the caller
+/// guarantees 0 <= x <= w - 1 and 0 <= y <= h - 1.
+cv::Vec3f Bilinear(const cv::Mat& rgb, float x, float y) {
+  const int x0 = std::min(static_cast<int>(x), rgb.cols - 2 >= 0 ? rgb.cols - 2 : 0);
+  const int y0 = std::min(static_cast<int>(y), rgb.rows - 2 >= 0 ? rgb.rows - 2 : 0);
+  const int x1 = std::min(x0 + 1, rgb.cols - 1), y1 = std::min(y0 + 1, rgb.rows - 1);
+  const float ax = x - x0, ay = y - y0;
+  const cv::Vec3b& p00 = rgb.at<cv::Vec3b>(y0, x0);
+  const cv::Vec3b& p01 = rgb.at<cv::Vec3b>(y0, x1);
+  const cv::Vec3b& p10 = rgb.at<cv::Vec3b>(y1, x0);
+  const cv::Vec3b& p11 = rgb.at<cv::Vec3b>(y1, x1);
+  cv::Vec3f out;
+  for (int c = 0; c < 3; ++c) {
+    const float top = p00[c] + ax * (p01[c] - p00[c]);
+    const float bottom = p10[c] + ax * (p11[c] - p10[c]);
+    out[c] = (top + ay * (bottom - top)) * (1.0f / 255.0f);
+  }
+  return out;
+}
+
+struct Slot {
+  int index = -1;
+  const scene::RgbdSample* frame = nullptr;
+  Eigen::Matrix3f r_kw;  // world -> keyframe camera
+  Eigen::Vector3f t_kw;
+  Eigen::Vector3f centre;  // keyframe camera centre in the world
+};
+
+}  // namespace
+
+BlendOptions BlendOptions::FromYaml(const YAML::Node& node, const std::string& source) {
+  const scene::StrictYamlReader r(source);
+  r.CheckKeys(node,
+              {"k", "metres_per_degree", "visibility_abs_m", "visibility_rel", "resolution_weight",
+               "penalty_epsilon", "grazing_floor", "angle_sigma_deg", "keyframe_min_distance"},
+              "blend options");
+  BlendOptions o;
+  if (node["k"]) {
+    const double k = r.Double(node["k"], "k");
+    if (k != std::floor(k)) r.Fail(node["k"], "k must be an integer");
+    o.k = static_cast<int>(k);
+  }
+  r.OptionalDouble(node, "metres_per_degree", "blend", &o.metres_per_degree);
+  r.OptionalDouble(node, "visibility_abs_m", "blend", &o.visibility_abs_m);
+  r.OptionalDouble(node, "visibility_rel", "blend", &o.visibility_rel);
+  r.OptionalDouble(node, "resolution_weight", "blend", &o.resolution_weight);
+  r.OptionalDouble(node, "penalty_epsilon", "blend", &o.penalty_epsilon);
+  r.OptionalDouble(node, "grazing_floor", "blend", &o.grazing_floor);
+  r.OptionalDouble(node, "angle_sigma_deg", "blend", &o.angle_sigma_deg);
+  r.OptionalDouble(node, "keyframe_min_distance", "blend", &o.keyframe_min_distance);
+  try {
+    o.Validate();
+  } catch (const std::invalid_argument& e) {
+    r.Fail(node, e.what());
+  }
+  return o;
+}
+
+void BlendOptions::Validate() const {
+  auto fail = [](const std::string& what) { throw std::invalid_argument("BlendOptions." + what); };
+  if (k < 1 || k > 16) fail("k must be in [1, 16], got " + std::to_string(k));
+  if (!(metres_per_degree >= 0.0) || !std::isfinite(metres_per_degree)) fail("metres_per_degree must be >= 0");
+  if (!(visibility_abs_m >= 0.0) || !std::isfinite(visibility_abs_m)) fail("visibility_abs_m must be >= 0");
+  if (!(visibility_rel >= 0.0) || !std::isfinite(visibility_rel)) fail("visibility_rel must be >= 0");
+  if (!(resolution_weight >= 0.0) || !std::isfinite(resolution_weight)) fail("resolution_weight must be >= 0");
+  if (!(penalty_epsilon > 0.0) || !std::isfinite(penalty_epsilon)) fail("penalty_epsilon must be > 0");
+  if (!(grazing_floor >= 0.0 && grazing_floor <= 1.0)) fail("grazing_floor must be in [0, 1]");
+  if (!(angle_sigma_deg > 0.0) || !std::isfinite(angle_sigma_deg)) fail("angle_sigma_deg must be > 0");
+  if (!(keyframe_min_distance >= 0.0) || !std::isfinite(keyframe_min_distance))
+    fail("keyframe_min_distance must be >= 0");
+}
+
+FusionSceneOptions FusionSceneOptions::FromYaml(const YAML::Node& node, const std::string& source) {
+  const scene::StrictYamlReader r(source);
+  r.CheckKeys(node, {"tsdf", "blend"}, "fusion scene options");
+  FusionSceneOptions o;
+  if (node["tsdf"]) o.tsdf = TsdfOptions::FromYaml(node["tsdf"], source);
+  if (node["blend"]) o.blend = BlendOptions::FromYaml(node["blend"], source);
+  return o;
+}
+
+void FusionSceneOptions::Validate() const {
+  tsdf.Validate();
+  blend.Validate();
+}
+
+FusionScene::FusionScene(scene::CameraInfo frame_camera, FusionSceneOptions options)
+    : frame_camera_(std::move(frame_camera)), options_(options), tsdf_(options.tsdf) {
+  options_.Validate();
+  if (frame_camera_.image_width <= 0 || frame_camera_.image_height <= 0 ||
+      frame_camera_.fx() <= 0.0 || frame_camera_.fy() <= 0.0) {
+    throw std::invalid_argument("FusionScene: the frame camera needs a positive size and focal length");
+  }
+}
+
+bool FusionScene::AddFrame(const scene::RgbdSample& frame, bool integrate) {
+  const cv::Size size(frame_camera_.image_width, frame_camera_.image_height);
+  if (frame.depth.type() != CV_32FC1 || frame.depth.size() != size || frame.rgb.type() != CV_8UC3 ||
+      frame.rgb.size() != size) {
+    throw std::invalid_argument("FusionScene::AddFrame: frame '" + frame.id +
+                                "' needs rgb CV_8UC3 and depth CV_32FC1 of the camera size " +
+                                std::to_string(size.width) + "x" + std::to_string(size.height));
+  }
+  if (integrate) tsdf_.Integrate(frame, frame_camera_);
+  const double min_d = options_.blend.keyframe_min_distance;
+  if (min_d > 0.0 && !poses_.empty()) {
+    const auto nearest = model::NearestPoseIndices(poses_, frame.pose, 1, options_.blend.metres_per_degree);
+    if (model::CombinedPoseDistance(poses_[nearest.front()], frame.pose,
+                                    options_.blend.metres_per_degree) < min_d)
+      return false;
+  }
+  scene::RgbdSample kf;
+  kf.stamp = frame.stamp;
+  kf.pose = frame.pose;
+  kf.id = frame.id;
+  kf.rgb = frame.rgb.clone();
+  kf.depth = frame.depth.clone();
+  keyframes_.push_back(std::move(kf));
+  poses_.push_back(frame.pose);
+  return true;
+}
+
+ViewCandidates FusionScene::RenderCandidates(const scene::Pose& pose, const scene::CameraInfo& camera,
+                                             const CandidateRequest& request) {
+  const BlendOptions& bo = options_.blend;
+  const int w = camera.image_width, h = camera.image_height;
+  const int k = bo.k;
+  TsdfRaycast ray = tsdf_.Raycast(pose, camera);
+
+  ViewCandidates c;
+  c.pose = pose;
+  c.camera = camera;
+  c.depth = ray.depth;
+  c.normals = ray.normals;
+  c.tsdf_colour = ray.colour;
+  c.observed = cv::Mat::zeros(h, w, CV_8UC1);
+  c.confidence = cv::Mat::zeros(h, w, CV_32FC1);
+  c.blended = cv::Mat::zeros(h, w, CV_32FC3);
+  c.colours.assign(static_cast<size_t>(k), cv::Mat());
+  c.weights.assign(static_cast<size_t>(k), cv::Mat());
+  for (int j = 0; j < k; ++j) {
+    c.colours[j] = cv::Mat::zeros(h, w, CV_32FC3);
+    c.weights[j] = cv::Mat::zeros(h, w, CV_32FC1);
+  }
+
+  // Keyframe slots for this view: nearest by pose, nearest first, minus an excluded one.
+  std::vector<Slot> slots;
+  {
+    const size_t want = static_cast<size_t>(k) + (request.exclude_keyframe ? 1 : 0);
+    for (size_t i : model::NearestPoseIndices(poses_, pose, want, bo.metres_per_degree)) {
+      if (request.exclude_keyframe && static_cast<int>(i) == *request.exclude_keyframe) continue;
+      if (static_cast<int>(slots.size()) == k) break;
+      Slot s;
+      s.index = static_cast<int>(i);
+      s.frame = &keyframes_[i];
+      const Eigen::Matrix4d kw = keyframes_[i].pose.Inverse().ToMatrix();
+      s.r_kw = kw.block<3, 3>(0, 0).cast<float>();
+      s.t_kw = kw.block<3, 1>(0, 3).cast<float>();
+      s.centre = keyframes_[i].pose.translation().cast<float>();
+      slots.push_back(s);
+    }
+  }
+  c.keyframe_indices.assign(static_cast<size_t>(k), -1);
+  c.keyframe_ids.assign(static_cast<size_t>(k), "");
+  c.keyframe_poses.assign(static_cast<size_t>(k), scene::Pose());
+  for (size_t j = 0; j < slots.size(); ++j) {
+    c.keyframe_indices[j] = slots[j].index;
+    c.keyframe_ids[j] = slots[j].frame->id;
+    c.keyframe_poses[j] = slots[j].frame->pose;
+  }
+
+  const Eigen::Matrix4d wc = pose.ToMatrix();
+  const Eigen::Matrix3f r_wc = wc.block<3, 3>(0, 0).cast<float>();
+  const Eigen::Vector3f centre = wc.block<3, 1>(0, 3).cast<float>();
+  const float fx = static_cast<float>(camera.fx()), fy = static_cast<float>(camera.fy());
+  const float cx = static_cast<float>(camera.cx()), cy = static_cast<float>(camera.cy());
+  const float kfx = static_cast<float>(frame_camera_.fx()), kfy = static_cast<float>(frame_camera_.fy());
+  const float kcx = static_cast<float>(frame_camera_.cx()), kcy = static_cast<float>(frame_camera_.cy());
+  const int kw_ = frame_camera_.image_width, kh = frame_camera_.image_height;
+  const float vis_abs = static_cast<float>(bo.visibility_abs_m), vis_rel = static_cast<float>(bo.visibility_rel);
+  const float res_w = static_cast<float>(bo.resolution_weight), eps = static_cast<float>(bo.penalty_epsilon);
+  const float floor_g = static_cast<float>(bo.grazing_floor);
+  const float sigma = static_cast<float>(bo.angle_sigma_deg / kRadToDeg);
+
+  int64_t observed = 0, blended = 0;
+  double angle_sum = 0.0, conf_sum = 0.0;
+  std::array<float, 16> pen{}, graze{}, ang{}, wgt{};
+  std::array<cv::Vec3f, 16> col{};
+  std::array<bool, 16> vis{};
+  for (int v = 0; v < h; ++v) {
+    const float* drow = c.depth.ptr<float>(v);
+    const cv::Vec3f* nrow = c.normals.ptr<cv::Vec3f>(v);
+    for (int u = 0; u < w; ++u) {
+      const float z = drow[u];
+      if (!(z > 0.0f)) continue;
+      ++observed;
+      c.observed.at<uint8_t>(v, u) = 255;
+      const Eigen::Vector3f xc((u - cx) / fx * z, (v - cy) / fy * z, z);
+      const Eigen::Vector3f xw = r_wc * xc + centre;
+      const float dist0 = xc.norm();
+      const Eigen::Vector3f dir = (xw - centre) / dist0;
+      const Eigen::Vector3f nw = r_wc * Eigen::Vector3f(nrow[u][0], nrow[u][1], nrow[u][2]);
+      float p_max = 0.0f;
+      int n_vis = 0;
+      for (size_t j = 0; j < slots.size(); ++j) {
+        vis[j] = false;
+        const Slot& s = slots[j];
+        const Eigen::Vector3f xk = s.r_kw * xw + s.t_kw;
+        if (!(xk.z() > 1e-4f)) continue;
+        const float pu = kfx * xk.x() / xk.z() + kcx, pv = kfy * xk.y() / xk.z() + kcy;
+        if (!(pu >= 0.0f && pv >= 0.0f && pu <= kw_ - 1.0f && pv <= kh - 1.0f)) continue;
+        const float dk = s.frame->depth.at<float>(static_cast<int>(pv + 0.5f), static_cast<int>(pu + 0.5f));
+        if (!(dk > 0.0f) || std::fabs(dk - xk.z()) > std::max(vis_abs, vis_rel * xk.z())) continue;
+        const Eigen::Vector3f to_k = s.centre - xw;  // point -> keyframe camera
+        const float dist_k = to_k.norm();
+        const Eigen::Vector3f dir_k = -to_k / dist_k;  // keyframe camera -> point
+        const float a = std::atan2(dir.cross(dir_k).norm(), dir.dot(dir_k));
+        const float res = std::max(0.0f, (dist_k - dist0) / dist0);
+        pen[j] = a + res_w * res;
+        ang[j] = a;
+        graze[j] = std::max(floor_g, nw.dot(to_k) / dist_k);
+        col[j] = Bilinear(s.frame->rgb, pu, pv);
+        vis[j] = true;
+        p_max = std::max(p_max, pen[j]);
+        ++n_vis;
+      }
+      if (n_vis == 0) {
+        c.blended.at<cv::Vec3f>(v, u) = c.tsdf_colour.at<cv::Vec3f>(v, u);
+        continue;
+      }
+      ++blended;
+      p_max = 1.5f * p_max + eps;
+      float wsum = 0.0f, a_min = 1e9f, g_best = 0.0f;
+      for (size_t j = 0; j < slots.size(); ++j) {
+        if (!vis[j]) continue;
+        const float q = 1.0f - pen[j] / p_max;
+        wgt[j] = q * q / (pen[j] + eps) * graze[j];
+        wsum += wgt[j];
+        if (ang[j] < a_min) {
+          a_min = ang[j];
+          g_best = graze[j];
+        }
+      }
+      cv::Vec3f out(0.0f, 0.0f, 0.0f);
+      for (size_t j = 0; j < slots.size(); ++j) {
+        if (!vis[j]) continue;
+        const float a = wgt[j] / wsum;
+        c.weights[j].at<float>(v, u) = a;
+        c.colours[j].at<cv::Vec3f>(v, u) = col[j];
+        out += a * col[j];
+      }
+      c.blended.at<cv::Vec3f>(v, u) = out;
+      const float conf = std::exp(-(a_min / sigma) * (a_min / sigma)) * g_best;
+      c.confidence.at<float>(v, u) = conf;
+      angle_sum += a_min * kRadToDeg;
+      conf_sum += conf;
+    }
+  }
+  const double n = static_cast<double>(w) * h;
+  c.coverage.observed_fraction = observed / n;
+  c.coverage.blended_fraction = blended / n;
+  c.coverage.mean_angle_deg = blended > 0 ? angle_sum / static_cast<double>(blended) : 0.0;
+  c.coverage.score = conf_sum / n;
+  return c;
+}
+
+}  // namespace p2i::fusion

@@ -1,0 +1,98 @@
+/// @file fusion_scene.h
+/// @brief The fused scene of the `fusion` method: a TSDF of every frame added (geometry) plus the
+/// keyframes whose colours are blended onto the raycast surface (appearance), rendering the
+/// per-view candidates of view_candidates.h at any pose and camera.
+#pragma once
+
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "fusion/tsdf_volume.h"
+#include "fusion/view_candidates.h"
+#include "scene/camera_info.h"
+#include "scene/pose.h"
+#include "scene/rgbd_sample.h"
+
+namespace YAML {
+class Node;
+}  // namespace YAML
+
+namespace p2i::fusion {
+
+/// Keyframe selection and view-dependent blending (unstructured lumigraph rendering, Buehler et
+/// al. 2001, with a per-view keyframe set).
+struct BlendOptions {
+  int k = 4;                        ///< keyframe slots per view
+  double metres_per_degree = 0.01;  ///< rotation weight of the keyframe choice (coverage.h)
+  /// Visibility: a keyframe sees a surface point when its own depth at the projection is within
+  /// max(visibility_abs_m, visibility_rel * z) of the point's depth in that keyframe.
+  double visibility_abs_m = 0.03;
+  double visibility_rel = 0.03;
+  /// Penalty of slot j at a pixel: ray angle (radians) + resolution_weight * max(0, (|X - C_j| -
+  /// |X - C|) / |X - C|) (a keyframe farther from the point than the requested camera sees it
+  /// blurrier). Weight: (1 - p / p_max)^2 / (p + penalty_epsilon), p_max = 1.5 x the largest
+  /// visible penalty (so the worst visible slot keeps a small weight, the best dominates, and a
+  /// keyframe exactly at the requested ray wins outright).
+  double resolution_weight = 0.5;
+  double penalty_epsilon = 1e-3;
+  /// Grazing: the weight is multiplied by max(cos(normal, keyframe ray), grazing_floor).
+  double grazing_floor = 0.1;
+  /// Confidence = exp(-(smallest visible ray angle / angle_sigma_deg)^2) x grazing factor.
+  double angle_sigma_deg = 15.0;
+  /// A new frame becomes a keyframe only when its pose is at least this far (CombinedPoseDistance)
+  /// from every keyframe (0 = every frame is a keyframe; the TSDF always gets every frame).
+  double keyframe_min_distance = 0.0;
+  static BlendOptions FromYaml(const YAML::Node& node, const std::string& source);
+  void Validate() const;
+};
+
+struct FusionSceneOptions {
+  TsdfOptions tsdf;
+  BlendOptions blend;
+  /// Reads {tsdf: {...}, blend: {...}} (both optional), then Validate().
+  static FusionSceneOptions FromYaml(const YAML::Node& node, const std::string& source);
+  void Validate() const;
+};
+
+/// What to leave out of one rendering (leave-one-out training of the refinement).
+struct CandidateRequest {
+  /// Keyframe index not to use as a colour source (its frame stays in the TSDF).
+  std::optional<int> exclude_keyframe;
+};
+
+/// Frames arrive at any time (AddFrame); every render uses everything added so far.
+/// Thread-compatible (one caller at a time), like TsdfVolume.
+class FusionScene {
+ public:
+  /// `frame_camera`: the calibration of the frames that will be added. Throws
+  /// std::invalid_argument on bad options or camera.
+  explicit FusionScene(scene::CameraInfo frame_camera, FusionSceneOptions options = {});
+
+  /// Integrates the frame into the TSDF (unless `integrate` is false: a colour source whose
+  /// geometry is already fused or must stay out) and keeps it as a keyframe (BlendOptions::
+  /// keyframe_min_distance). Returns whether it became a keyframe. Throws std::invalid_argument
+  /// naming the frame when its images do not match the frame camera.
+  bool AddFrame(const scene::RgbdSample& frame, bool integrate = true);
+
+  /// Raycast + keyframe blending at `pose` through `camera` (any size and aspect).
+  ViewCandidates RenderCandidates(const scene::Pose& pose, const scene::CameraInfo& camera,
+                                  const CandidateRequest& request = {});
+
+  const std::vector<scene::RgbdSample>& keyframes() const { return keyframes_; }
+  std::vector<scene::Pose> KeyframePoses() const { return poses_; }
+  const scene::CameraInfo& frame_camera() const { return frame_camera_; }
+  const FusionSceneOptions& options() const { return options_; }
+  TsdfStats Stats() const { return tsdf_.Stats(); }
+  TsdfVolume& tsdf() { return tsdf_; }
+
+ private:
+  scene::CameraInfo frame_camera_;
+  FusionSceneOptions options_;
+  TsdfVolume tsdf_;
+  std::vector<scene::RgbdSample> keyframes_;
+  std::vector<scene::Pose> poses_;
+};
+
+}  // namespace p2i::fusion

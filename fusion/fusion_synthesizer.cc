@@ -1,0 +1,96 @@
+/// @file fusion_synthesizer.cc
+/// @brief `fusion` and `open3d_tsdf` behind model::ViewSynthesizer.
+#include "fusion/fusion_synthesizer.h"
+
+#include <stdexcept>
+#include <utility>
+
+#include <yaml-cpp/yaml.h>
+
+#include "model/push_pull_fill.h"
+#include "scene/strict_yaml_reader.h"
+
+namespace p2i::fusion {
+namespace {
+
+void CheckCamera(const scene::CameraInfo& c, const std::string& what) {
+  if (c.image_width <= 0 || c.image_height <= 0 || c.fx() <= 0.0 || c.fy() <= 0.0)
+    throw std::invalid_argument(what + ": the camera needs a positive size and focal length");
+}
+
+/// The view from the raycast maps: 8-bit RGB of `rgb` (float [0, 1]), the raycast depth, holes
+/// (depth 0) filled by push-pull when asked.
+scene::RgbdSample ToView(const scene::Pose& pose, const cv::Mat& rgb, const cv::Mat& depth, bool fill,
+                   const std::string& id) {
+  scene::RgbdSample v;
+  v.pose = pose;
+  v.id = id;
+  rgb.convertTo(v.rgb, CV_8UC3, 255.0);
+  v.depth = depth.clone();
+  if (fill) model::PushPullFillRgbd(v.rgb, v.depth, depth > 0.0f);
+  return v;
+}
+
+}  // namespace
+
+FusionOptions FusionOptions::FromYaml(const YAML::Node& node, const std::string& source) {
+  const scene::StrictYamlReader r(source);
+  r.CheckKeys(node, {"tsdf", "blend", "fill_holes"}, "fusion options");
+  FusionOptions o;
+  if (node["tsdf"]) o.scene.tsdf = TsdfOptions::FromYaml(node["tsdf"], source);
+  if (node["blend"]) o.scene.blend = BlendOptions::FromYaml(node["blend"], source);
+  if (node["fill_holes"]) {
+    try {
+      o.fill_holes = node["fill_holes"].as<bool>();
+    } catch (const YAML::Exception&) {
+      r.Fail(node["fill_holes"], "fill_holes must be true or false");
+    }
+  }
+  return o;
+}
+
+FusionSynthesizer::FusionSynthesizer(const scene::RgbdDataset& training, FusionOptions options,
+                                     std::optional<scene::CameraInfo> output_camera,
+                                     std::shared_ptr<ViewRefiner> refiner)
+    : options_(options),
+      scene_(training.camera, options.scene),
+      output_camera_(output_camera ? *output_camera : training.camera),
+      refiner_(std::move(refiner)) {
+  CheckCamera(output_camera_, "FusionSynthesizer output");
+  for (const auto& f : training.frames) scene_.AddFrame(f);
+}
+
+scene::RgbdSample FusionSynthesizer::RenderAt(const scene::Pose& pose, const scene::CameraInfo& camera) {
+  CheckCamera(camera, "FusionSynthesizer::RenderAt");
+  const ViewCandidates c = scene_.RenderCandidates(pose, camera);
+  last_coverage_ = c.coverage;
+  if (refiner_) {
+    scene::RgbdSample v = refiner_->Refine(c);
+    v.pose = pose;
+    return v;
+  }
+  return ToView(pose, c.blended, c.depth, options_.fill_holes, "fusion");
+}
+
+scene::RgbdSample FusionSynthesizer::Render(const scene::Pose& pose) { return RenderAt(pose, output_camera_); }
+
+Open3dTsdfSynthesizer::Open3dTsdfSynthesizer(const scene::RgbdDataset& training, FusionOptions options,
+                                             std::optional<scene::CameraInfo> output_camera)
+    : options_(options),
+      tsdf_(options.scene.tsdf),
+      frame_camera_(training.camera),
+      output_camera_(output_camera ? *output_camera : training.camera) {
+  CheckCamera(frame_camera_, "Open3dTsdfSynthesizer training");
+  CheckCamera(output_camera_, "Open3dTsdfSynthesizer output");
+  for (const auto& f : training.frames) tsdf_.Integrate(f, frame_camera_);
+}
+
+scene::RgbdSample Open3dTsdfSynthesizer::Render(const scene::Pose& pose) {
+  const TsdfRaycast r = tsdf_.Raycast(pose, output_camera_);
+  last_hole_fraction_ =
+      1.0 - static_cast<double>(cv::countNonZero(r.depth > 0.0f)) /
+                (static_cast<double>(output_camera_.image_width) * output_camera_.image_height);
+  return ToView(pose, r.colour, r.depth, options_.fill_holes, "open3d_tsdf");
+}
+
+}  // namespace p2i::fusion

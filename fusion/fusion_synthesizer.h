@@ -1,0 +1,99 @@
+/// @file fusion_synthesizer.h
+/// @brief The `fusion` method (issue 12): TSDF geometry + view-dependent keyframe blending
+/// (FusionScene), optionally refined by a ViewRefiner, behind model::ViewSynthesizer; and the
+/// `open3d_tsdf` peer (Open3D's own voxel-colour rendering of the same TSDF).
+#pragma once
+
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "fusion/fusion_scene.h"
+#include "fusion/view_candidates.h"
+#include "model/view_synthesizer.h"
+#include "scene/camera_info.h"
+#include "scene/rgbd_sample.h"
+
+namespace YAML {
+class Node;
+}  // namespace YAML
+
+namespace p2i::fusion {
+
+struct FusionOptions {
+  FusionSceneOptions scene;
+  /// Fill the pixels the TSDF never observed (no raycast hit) by push-pull, RGB and depth, as
+  /// depth warp's fill_holes does. Off: they stay rgb (0, 0, 0), depth 0.
+  bool fill_holes = true;
+  /// Reads {tsdf: {...}, blend: {...}, fill_holes: bool} (all optional), then Validate().
+  /// Unknown keys and bad values throw std::runtime_error naming `source`, the line and the key.
+  static FusionOptions FromYaml(const YAML::Node& node, const std::string& source);
+  void Validate() const { scene.Validate(); }
+};
+
+/// `fusion`. Built from training frames (all integrated and kept as keyframes) and fed more at
+/// any time with AddFrame. Render: RenderCandidates at the pose and the output camera, then the
+/// refiner when there is one, else the blend (8-bit) with the raycast depth, holes filled when
+/// fill_holes. Not thread-safe (ViewSynthesizer contract).
+class FusionSynthesizer : public model::ViewSynthesizer {
+ public:
+  /// `training` may have no frames (an online scene starts empty: views are all holes until
+  /// frames arrive). Output at `output_camera`, default the training camera. Throws
+  /// std::invalid_argument on bad options, a bad camera or a frame of the wrong size.
+  FusionSynthesizer(const scene::RgbdDataset& training, FusionOptions options = {},
+                    std::optional<scene::CameraInfo> output_camera = std::nullopt,
+                    std::shared_ptr<ViewRefiner> refiner = nullptr);
+
+  std::string Name() const override { return "fusion"; }
+  scene::CameraInfo Camera() const override { return output_camera_; }
+  scene::RgbdSample Render(const scene::Pose& pose) override;
+  int64_t ParameterCount() const override { return refiner_ ? refiner_->ParameterCount() : 0; }
+  double FlopsPerView() const override { return refiner_ ? refiner_->FlopsPerView(output_camera_) : 0.0; }
+
+  /// Integrates a new frame (training camera) and keeps it as a keyframe.
+  bool AddFrame(const scene::RgbdSample& frame) { return scene_.AddFrame(frame); }
+  /// The candidates of one view at any camera (the refinement's input).
+  ViewCandidates RenderCandidates(const scene::Pose& pose, const scene::CameraInfo& camera,
+                                  const CandidateRequest& request = {}) {
+    return scene_.RenderCandidates(pose, camera, request);
+  }
+  /// Render at another camera than Camera() (any size and aspect).
+  scene::RgbdSample RenderAt(const scene::Pose& pose, const scene::CameraInfo& camera);
+
+  void SetRefiner(std::shared_ptr<ViewRefiner> refiner) { refiner_ = std::move(refiner); }
+  FusionScene& scene() { return scene_; }
+  /// Coverage of the last rendered view; fraction of its pixels the TSDF never observed.
+  const ViewCoverage& LastCoverage() const { return last_coverage_; }
+  double LastHoleFraction() const { return 1.0 - last_coverage_.observed_fraction; }
+
+ private:
+  FusionOptions options_;
+  FusionScene scene_;
+  scene::CameraInfo output_camera_;
+  std::shared_ptr<ViewRefiner> refiner_;
+  ViewCoverage last_coverage_;
+};
+
+/// `open3d_tsdf`: what a user of Open3D would pick: the same TSDF, rendered by its own raycast of
+/// depth and interpolated voxel colour (no keyframes). Holes filled like fusion's.
+class Open3dTsdfSynthesizer : public model::ViewSynthesizer {
+ public:
+  Open3dTsdfSynthesizer(const scene::RgbdDataset& training, FusionOptions options = {},
+                        std::optional<scene::CameraInfo> output_camera = std::nullopt);
+
+  std::string Name() const override { return "open3d_tsdf"; }
+  scene::CameraInfo Camera() const override { return output_camera_; }
+  scene::RgbdSample Render(const scene::Pose& pose) override;
+  void AddFrame(const scene::RgbdSample& frame) { tsdf_.Integrate(frame, frame_camera_); }
+  double LastHoleFraction() const { return last_hole_fraction_; }
+  TsdfStats Stats() const { return tsdf_.Stats(); }
+
+ private:
+  FusionOptions options_;
+  TsdfVolume tsdf_;
+  scene::CameraInfo frame_camera_;
+  scene::CameraInfo output_camera_;
+  double last_hole_fraction_ = 0.0;
+};
+
+}  // namespace p2i::fusion

@@ -1,0 +1,316 @@
+/// @file tsdf_volume.cc
+/// @brief TsdfVolume on Open3D's tensor VoxelBlockGrid (float tsdf, weight and colour).
+#include "fusion/tsdf_volume.h"
+
+#include <omp.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <stdexcept>
+#include <vector>
+
+#include <yaml-cpp/yaml.h>
+
+#include <memory>
+#include <string>
+#include <unordered_map>
+
+#include <open3d/core/Tensor.h>
+#include <open3d/core/hashmap/HashMap.h>
+#include <open3d/t/geometry/Geometry.h>
+#include <open3d/t/geometry/Image.h>
+#include <open3d/t/geometry/PointCloud.h>
+#include <open3d/t/geometry/TensorMap.h>
+#include <open3d/t/geometry/TriangleMesh.h>
+// Open3D 0.16's VoxelBlockGrid::RayCast sizes its private fragment buffer (the range map's work
+// list) to the previous call's exact need and drops every block whose fragments reach the end of
+// the buffer (a ">=" check): the same view twice loses blocks, a bigger view loses many, and the
+// first call on a small image gets a buffer of 0 (measured: 0 % then 65 % of the pixels of a
+// plane hit). The buffer is a private member, so it is sized here before each raycast; only that
+// class's access is opened (everything it includes is included above).
+#define private public
+#include <open3d/t/geometry/VoxelBlockGrid.h>
+#undef private
+
+#include "scene/strict_yaml_reader.h"
+
+namespace p2i::fusion {
+namespace {
+
+namespace core = open3d::core;
+namespace tg = open3d::t::geometry;
+
+/// Open3D 0.16 consults OMP_NUM_THREADS when it sizes its parallel loops; set it once (without
+/// overriding a user's value) and set the count of the calling thread before each call.
+void UseThreads(int threads) {
+  static const bool env_set = [] {
+    setenv("OMP_NUM_THREADS", "1", 0);
+    return true;
+  }();
+  (void)env_set;
+  omp_set_num_threads(threads);
+}
+
+core::Tensor Intrinsic(const scene::CameraInfo& c) {
+  return core::Tensor::Init<double>({{c.fx(), 0.0, c.cx()}, {0.0, c.fy(), c.cy()}, {0.0, 0.0, 1.0}});
+}
+
+/// World-to-camera 4x4 (Open3D's extrinsic) of a camera-to-world pose.
+core::Tensor Extrinsic(const scene::Pose& pose) {
+  const Eigen::Matrix4d m = pose.Inverse().ToMatrix();
+  std::vector<double> v(16);
+  for (int r = 0; r < 4; ++r)
+    for (int c = 0; c < 4; ++c) v[static_cast<size_t>(r * 4 + c)] = m(r, c);
+  return core::Tensor(v, {4, 4}, core::Float64);
+}
+
+int Int(const scene::StrictYamlReader& r, const YAML::Node& n, const std::string& what) {
+  const double v = r.Double(n, what);
+  if (v != std::floor(v)) r.Fail(n, what + " must be an integer");
+  return static_cast<int>(v);
+}
+
+/// One pass of crack filling (TsdfOptions::crack_fill_passes) on a raycast.
+void FillCracks(TsdfRaycast* r) {
+  const cv::Mat depth = r->depth.clone();
+  const cv::Mat normals = r->normals.clone();
+  const cv::Mat colour = r->colour.clone();
+  for (int v = 1; v + 1 < depth.rows; ++v) {
+    for (int u = 1; u + 1 < depth.cols; ++u) {
+      if (depth.at<float>(v, u) > 0.0f) continue;
+      int n = 0;
+      float zmin = 1e9f, zmax = 0.0f, zsum = 0.0f;
+      cv::Vec3f nsum(0, 0, 0), csum(0, 0, 0);
+      for (int dv = -1; dv <= 1; ++dv)
+        for (int du = -1; du <= 1; ++du) {
+          const float z = depth.at<float>(v + dv, u + du);
+          if (!(z > 0.0f)) continue;
+          ++n;
+          zmin = std::min(zmin, z);
+          zmax = std::max(zmax, z);
+          zsum += z;
+          nsum += normals.at<cv::Vec3f>(v + dv, u + du);
+          csum += colour.at<cv::Vec3f>(v + dv, u + du);
+        }
+      if (n < 3 || zmax > 1.05f * zmin) continue;
+      const float len = static_cast<float>(cv::norm(nsum));
+      if (!(len > 1e-6f)) continue;
+      r->depth.at<float>(v, u) = zsum / n;
+      r->normals.at<cv::Vec3f>(v, u) = nsum / len;
+      r->colour.at<cv::Vec3f>(v, u) = csum / static_cast<float>(n);
+    }
+  }
+}
+
+}  // namespace
+
+TsdfOptions TsdfOptions::FromYaml(const YAML::Node& node, const std::string& source) {
+  const scene::StrictYamlReader r(source);
+  r.CheckKeys(node,
+              {"voxel_size_m", "block_resolution", "initial_blocks", "trunc_voxels", "depth_min_m",
+               "depth_max_m", "weight_threshold", "crack_fill_passes", "threads"},
+              "tsdf options");
+  TsdfOptions o;
+  r.OptionalDouble(node, "voxel_size_m", "tsdf", &o.voxel_size_m);
+  if (node["block_resolution"]) o.block_resolution = Int(r, node["block_resolution"], "block_resolution");
+  if (node["initial_blocks"]) o.initial_blocks = Int(r, node["initial_blocks"], "initial_blocks");
+  r.OptionalDouble(node, "trunc_voxels", "tsdf", &o.trunc_voxels);
+  r.OptionalDouble(node, "depth_min_m", "tsdf", &o.depth_min_m);
+  r.OptionalDouble(node, "depth_max_m", "tsdf", &o.depth_max_m);
+  r.OptionalDouble(node, "weight_threshold", "tsdf", &o.weight_threshold);
+  if (node["crack_fill_passes"]) o.crack_fill_passes = Int(r, node["crack_fill_passes"], "crack_fill_passes");
+  if (node["threads"]) o.threads = Int(r, node["threads"], "threads");
+  try {
+    o.Validate();
+  } catch (const std::invalid_argument& e) {
+    r.Fail(node, e.what());
+  }
+  return o;
+}
+
+void TsdfOptions::Validate() const {
+  auto fail = [](const std::string& what) { throw std::invalid_argument("TsdfOptions." + what); };
+  if (!(voxel_size_m > 0.0) || !std::isfinite(voxel_size_m)) fail("voxel_size_m must be > 0");
+  if (block_resolution < 2 || block_resolution > 64) fail("block_resolution must be in [2, 64]");
+  if (initial_blocks < 1) fail("initial_blocks must be >= 1");
+  if (!(trunc_voxels >= 1.0) || !std::isfinite(trunc_voxels)) fail("trunc_voxels must be >= 1");
+  if (!(depth_min_m > 0.0)) fail("depth_min_m must be > 0");
+  if (!(depth_max_m > depth_min_m) || !std::isfinite(depth_max_m))
+    fail("depth_max_m must be finite and > depth_min_m");
+  if (!(weight_threshold >= 0.0) || !std::isfinite(weight_threshold))
+    fail("weight_threshold must be finite and >= 0");
+  if (crack_fill_passes < 0) fail("crack_fill_passes must be >= 0");
+  if (threads < 1) fail("threads must be >= 1");
+}
+
+struct TsdfVolume::Impl {
+  tg::VoxelBlockGrid grid;
+  int64_t frames = 0;
+};
+
+TsdfVolume::TsdfVolume(TsdfOptions options) : options_(options) {
+  options_.Validate();
+  UseThreads(options_.threads);
+  impl_ = std::make_unique<Impl>();
+  impl_->grid = tg::VoxelBlockGrid({"tsdf", "weight", "color"},
+                                   {core::Float32, core::Float32, core::Float32}, {{1}, {1}, {3}},
+                                   static_cast<float>(options_.voxel_size_m),
+                                   options_.block_resolution, options_.initial_blocks,
+                                   core::Device("CPU:0"));
+}
+
+TsdfVolume::~TsdfVolume() = default;
+TsdfVolume::TsdfVolume(TsdfVolume&&) noexcept = default;
+TsdfVolume& TsdfVolume::operator=(TsdfVolume&&) noexcept = default;
+
+void TsdfVolume::Integrate(const scene::RgbdSample& frame, const scene::CameraInfo& camera) {
+  const cv::Size size(camera.image_width, camera.image_height);
+  if (frame.depth.type() != CV_32FC1 || frame.depth.size() != size || frame.rgb.type() != CV_8UC3 ||
+      frame.rgb.size() != size) {
+    throw std::invalid_argument("TsdfVolume::Integrate: frame '" + frame.id +
+                                "' needs rgb CV_8UC3 and depth CV_32FC1 of the camera size " +
+                                std::to_string(size.width) + "x" + std::to_string(size.height));
+  }
+  UseThreads(options_.threads);
+  cv::Mat depth = frame.depth.isContinuous() ? frame.depth : frame.depth.clone();
+  cv::Mat colour;
+  frame.rgb.convertTo(colour, CV_32FC3, 1.0 / 255.0);
+  const core::Tensor dt(depth.data, core::Float32, {depth.rows, depth.cols, 1});
+  const core::Tensor ct(colour.data, core::Float32, {colour.rows, colour.cols, 3});
+  const tg::Image di(dt), ci(ct);
+  const core::Tensor k = Intrinsic(camera), e = Extrinsic(frame.pose);
+  const float trunc = static_cast<float>(options_.trunc_voxels);
+  const float dmax = static_cast<float>(options_.depth_max_m);
+  const core::Tensor blocks = impl_->grid.GetUniqueBlockCoordinates(di, k, e, 1.0f, dmax, trunc);
+  if (blocks.GetLength() == 0) {
+    ++impl_->frames;  // nothing valid in range: the frame adds nothing
+    return;
+  }
+  impl_->grid.Integrate(blocks, di, ci, k, e, 1.0f, dmax, trunc);
+  ++impl_->frames;
+}
+
+TsdfRaycast TsdfVolume::Raycast(const scene::Pose& pose, const scene::CameraInfo& camera) {
+  const int w = camera.image_width, h = camera.image_height;
+  TsdfRaycast out;
+  out.depth = cv::Mat::zeros(h, w, CV_32FC1);
+  out.normals = cv::Mat::zeros(h, w, CV_32FC3);
+  out.colour = cv::Mat::zeros(h, w, CV_32FC3);
+  if (w <= 0 || h <= 0 || camera.fx() <= 0.0 || camera.fy() <= 0.0)
+    throw std::invalid_argument("TsdfVolume::Raycast: the camera needs a positive size and focal length");
+  UseThreads(options_.threads);
+  core::HashMap map = impl_->grid.GetHashMap();
+  if (map.Size() == 0) return out;
+
+  // Blocks in the view frustum (block centre projected inside the image, grown by the block's
+  // bounding radius), so the raycast's range map covers only what this view can see.
+  const core::Tensor active = map.GetActiveIndices().To(core::Int64);
+  const core::Tensor keys = map.GetKeyTensor().IndexGet({active}).Contiguous();  // (N, 3) Int32
+  const int64_t n = keys.GetLength();
+  const int* kp = keys.GetDataPtr<int>();
+  const double block = options_.voxel_size_m * options_.block_resolution;
+  const double radius = block * std::sqrt(3.0) * 0.5;
+  const Eigen::Matrix4d wc = pose.Inverse().ToMatrix();
+  const Eigen::Matrix3d r = wc.block<3, 3>(0, 0);
+  const Eigen::Vector3d t = wc.block<3, 1>(0, 3);
+  std::vector<int> selected;
+  selected.reserve(static_cast<size_t>(n) * 3);
+  for (int64_t i = 0; i < n; ++i) {
+    const Eigen::Vector3d centre((kp[3 * i] + 0.5) * block, (kp[3 * i + 1] + 0.5) * block,
+                                 (kp[3 * i + 2] + 0.5) * block);
+    const Eigen::Vector3d pc = r * centre + t;
+    if (pc.z() < -radius || pc.z() > options_.depth_max_m + radius) continue;
+    if (pc.z() > radius) {
+      const double u = camera.fx() * pc.x() / pc.z() + camera.cx();
+      const double v = camera.fy() * pc.y() / pc.z() + camera.cy();
+      const double mu = camera.fx() * radius / (pc.z() - radius) + 1.0;
+      const double mv = camera.fy() * radius / (pc.z() - radius) + 1.0;
+      if (u < -mu || u > w + mu || v < -mv || v > h + mv) continue;
+    }
+    selected.insert(selected.end(), {kp[3 * i], kp[3 * i + 1], kp[3 * i + 2]});
+  }
+  if (selected.empty()) return out;
+  const core::Tensor frustum(selected, {static_cast<int64_t>(selected.size() / 3), 3}, core::Int32);
+
+  const core::Tensor k = Intrinsic(camera), e = Extrinsic(pose);
+  // Range map (ray start/end per tile of down x down pixels): Open3D's default factor 8, finer for
+  // small images so that a tile does not span a large part of the view.
+  const int down = std::max(1, std::min(8, std::min(w, h) / 16));
+  // Upper bound of the fragments (16 x 16 tiles of the range map) the frustum blocks can need,
+  // plus one for Open3D's ">=" check (see the include above).
+  const int64_t h_down = (h + down - 1) / down, w_down = (w + down - 1) / down;
+  const int64_t per_block = ((h_down + 15) / 16 + 1) * ((w_down + 15) / 16 + 1);
+  impl_->grid.fragment_buffer_ =
+      core::Tensor({frustum.GetLength() * per_block + 1, 6}, core::Float32, core::Device("CPU:0"));
+  auto result = impl_->grid.RayCast(frustum, k, e, w, h, {"depth", "normal", "color"}, 1.0f,
+                                    static_cast<float>(options_.depth_min_m),
+                                    static_cast<float>(options_.depth_max_m),
+                                    static_cast<float>(options_.weight_threshold),
+                                    static_cast<float>(options_.trunc_voxels), down);
+  const core::Tensor depth = result["depth"].Contiguous();
+  const core::Tensor normal = result["normal"].Contiguous();
+  const core::Tensor colour = result["color"].Contiguous();
+  const float* dp = depth.GetDataPtr<float>();
+  const float* np = normal.GetDataPtr<float>();
+  const float* cp = colour.GetDataPtr<float>();
+  const Eigen::Matrix3f rf = r.cast<float>();
+  for (int v = 0; v < h; ++v) {
+    float* drow = out.depth.ptr<float>(v);
+    cv::Vec3f* nrow = out.normals.ptr<cv::Vec3f>(v);
+    cv::Vec3f* crow = out.colour.ptr<cv::Vec3f>(v);
+    for (int u = 0; u < w; ++u) {
+      const size_t i = static_cast<size_t>(v) * w + u;
+      const float z = dp[i];
+      if (!(z > 0.0f) || !std::isfinite(z)) continue;
+      Eigen::Vector3f nc = rf * Eigen::Vector3f(np[3 * i], np[3 * i + 1], np[3 * i + 2]);
+      const float len = nc.norm();
+      if (!(len > 1e-6f)) continue;  // no gradient: not a usable surface
+      nc /= len;
+      const Eigen::Vector3f ray((u - camera.cx()) / camera.fx(), (v - camera.cy()) / camera.fy(), 1.0f);
+      if (nc.dot(ray) > 0.0f) nc = -nc;  // face the camera
+      drow[u] = z;
+      nrow[u] = cv::Vec3f(nc.x(), nc.y(), nc.z());
+      crow[u] = cv::Vec3f(std::min(1.0f, std::max(0.0f, cp[3 * i])),
+                          std::min(1.0f, std::max(0.0f, cp[3 * i + 1])),
+                          std::min(1.0f, std::max(0.0f, cp[3 * i + 2])));
+    }
+  }
+  for (int pass = 0; pass < options_.crack_fill_passes; ++pass) FillCracks(&out);
+  return out;
+}
+
+TsdfStats TsdfVolume::Stats() const {
+  TsdfStats s;
+  s.frames = impl_->frames;
+  s.blocks = impl_->grid.GetHashMap().Size();
+  const double voxels = std::pow(static_cast<double>(options_.block_resolution), 3.0);
+  // tsdf (4 B) + weight (4 B) + colour (12 B) per voxel, plus the key (3 x int32) per block.
+  s.memory_bytes = static_cast<double>(s.blocks) * (voxels * 20.0 + 12.0);
+  s.block_volume_m3 = static_cast<double>(s.blocks) *
+                      std::pow(options_.voxel_size_m * options_.block_resolution, 3.0);
+  return s;
+}
+
+void TsdfVolume::Save(const std::string& path) const {
+  // Open3D appends nothing when the name already ends in .npz; keep the suffix on the temp file.
+  const std::string tmp = path + ".tmp.npz";
+  impl_->grid.Save(tmp);
+  std::error_code ec;
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) throw std::runtime_error("TsdfVolume::Save: cannot rename " + tmp + " to " + path + ": " + ec.message());
+}
+
+TsdfVolume TsdfVolume::Load(const std::string& path, TsdfOptions options) {
+  if (!std::filesystem::exists(path))
+    throw std::runtime_error("TsdfVolume::Load: no file " + path);
+  TsdfVolume v(options);
+  try {
+    v.impl_->grid = tg::VoxelBlockGrid::Load(path);
+  } catch (const std::exception& e) {
+    throw std::runtime_error("TsdfVolume::Load: " + path + " is not a saved volume: " + e.what());
+  }
+  return v;
+}
+
+}  // namespace p2i::fusion

@@ -1,0 +1,97 @@
+/// @file tsdf_volume.h
+/// @brief A growing TSDF of RGB-D frames (Open3D's t::geometry::VoxelBlockGrid behind a pimpl:
+/// no Open3D type in this header) with a raycast of depth, normals and voxel colour at any pose
+/// and camera.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include <opencv2/core.hpp>
+
+#include "scene/camera_info.h"
+#include "scene/pose.h"
+#include "scene/rgbd_sample.h"
+
+namespace YAML {
+class Node;
+}  // namespace YAML
+
+namespace p2i::fusion {
+
+struct TsdfOptions {
+  double voxel_size_m = 0.02;     ///< edge of one voxel
+  int block_resolution = 16;      ///< voxels per block edge (blocks are allocated sparsely)
+  int initial_blocks = 2000;      ///< hash map capacity at start (it grows on demand)
+  /// SDF truncation in voxels (Open3D's trunc_voxel_multiplier): the band fused around each
+  /// measured surface. Larger closes thin gaps, smaller keeps thin objects apart.
+  double trunc_voxels = 4.0;
+  double depth_min_m = 0.1;       ///< raycast starts this far from the camera
+  double depth_max_m = 5.0;       ///< measurements farther away are not integrated
+  /// Raycast: a zero crossing counts as a surface only where the fused weight (frames that saw
+  /// it) is above this (Open3D compares strictly: 0.5 accepts a surface seen once).
+  double weight_threshold = 0.5;
+  /// Raycast cracks: Open3D's raycast leaves thin lines without a hit where the surface was
+  /// observed (along the silhouettes of objects in the frames that were fused). A pixel without a
+  /// hit whose valid 8-neighbours (at least 3) agree within 5 % takes their mean depth and normal,
+  /// repeated this many passes (0 = off).
+  int crack_fill_passes = 2;
+  /// OpenMP threads of Open3D's kernels (set in the calling thread before each call).
+  int threads = 1;
+  /// Reads the keys present in a YAML map (others keep their defaults), then Validate().
+  /// Unknown keys and bad values throw std::runtime_error naming `source`, the line and the key.
+  static TsdfOptions FromYaml(const YAML::Node& node, const std::string& source);
+  /// Throws std::invalid_argument naming the field.
+  void Validate() const;
+};
+
+/// Depth, normals and voxel colour raycast from the TSDF at one pose.
+struct TsdfRaycast {
+  cv::Mat depth;    ///< CV_32FC1 z-depth (m) along the optical axis, 0 = no surface
+  cv::Mat normals;  ///< CV_32FC3 unit normals in the camera frame, facing the camera; 0 = none
+  cv::Mat colour;   ///< CV_32FC3 RGB in [0, 1] (interpolated voxel colour); 0 = none
+};
+
+struct TsdfStats {
+  int64_t frames = 0;        ///< frames integrated
+  int64_t blocks = 0;        ///< allocated voxel blocks
+  double memory_bytes = 0;   ///< bytes of voxel data (tsdf + weight + colour, float32) + keys
+  double block_volume_m3 = 0;  ///< volume of the allocated blocks (m^3)
+};
+
+/// Thread-compatible: one caller at a time (Integrate and Raycast both touch Open3D's hash map).
+/// Frames are integrated as they arrive (incremental: Raycast works between any two Integrate
+/// calls).
+class TsdfVolume {
+ public:
+  explicit TsdfVolume(TsdfOptions options = {});
+  ~TsdfVolume();
+  TsdfVolume(TsdfVolume&&) noexcept;
+  TsdfVolume& operator=(TsdfVolume&&) noexcept;
+
+  /// Fuses one frame (rgb CV_8UC3 RGB, depth CV_32FC1 metres, 0 = invalid, both of `camera`'s
+  /// size; `frame.pose` camera-to-world). Throws std::invalid_argument naming the frame on a
+  /// wrong size or type.
+  void Integrate(const scene::RgbdSample& frame, const scene::CameraInfo& camera);
+
+  /// Raycasts the fused surface seen from `pose` through `camera` (any size and intrinsics).
+  /// An empty volume gives all-zero maps.
+  TsdfRaycast Raycast(const scene::Pose& pose, const scene::CameraInfo& camera);
+
+  TsdfStats Stats() const;
+  const TsdfOptions& options() const { return options_; }
+
+  /// Writes the voxel data (Open3D .npz) atomically: `path` + ".tmp" then rename.
+  void Save(const std::string& path) const;
+  /// Reads a volume written by Save. `options` must hold the voxel size and block resolution it
+  /// was saved with (the caller stores them beside it). Throws std::runtime_error naming the file.
+  static TsdfVolume Load(const std::string& path, TsdfOptions options = {});
+
+ private:
+  struct Impl;
+  TsdfOptions options_;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace p2i::fusion

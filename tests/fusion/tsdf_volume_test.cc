@@ -1,0 +1,130 @@
+/// @file tsdf_volume_test.cc
+/// @brief TsdfVolume: the raycast hits known surfaces at the right depth, at any camera.
+#include <filesystem>
+
+#include <catch2/catch.hpp>
+
+#include "fusion/tsdf_volume.h"
+#include "tests/fusion/fusion_test_util.h"
+
+namespace p2i::fusion {
+namespace {
+
+using testing::At;
+using testing::Cam;
+using testing::PlaneScene;
+
+/// Fraction of pixels with a hit, and the largest |depth - expected| over the hits.
+std::pair<double, double> HitsAndError(const cv::Mat& depth, const cv::Mat& expected) {
+  int hits = 0;
+  double worst = 0.0;
+  for (int v = 0; v < depth.rows; ++v)
+    for (int u = 0; u < depth.cols; ++u) {
+      const float z = depth.at<float>(v, u);
+      if (z <= 0.0f) continue;
+      ++hits;
+      worst = std::max(worst, static_cast<double>(std::abs(z - expected.at<float>(v, u))));
+    }
+  return {static_cast<double>(hits) / (depth.rows * depth.cols), worst};
+}
+
+TEST_CASE("TsdfVolume: an empty volume raycasts to nothing", "[unit]") {
+  TsdfVolume vol;
+  const TsdfRaycast r = vol.Raycast(At(0, 0, 0), Cam(32, 24, 30));
+  CHECK(cv::countNonZero(r.depth) == 0);
+  CHECK(r.depth.size() == cv::Size(32, 24));
+  CHECK(vol.Stats().blocks == 0);
+}
+
+TEST_CASE("TsdfVolume: a fused plane is hit at its z-depth, normals face the camera", "[unit]") {
+  const PlaneScene scene;  // z = 2
+  const auto cam = Cam(80, 60, 70);
+  TsdfVolume vol;
+  vol.Integrate(scene.Render(At(0, 0, 0), cam), cam);
+  vol.Integrate(scene.Render(At(0.1, 0, 0), cam), cam);
+  CHECK(vol.Stats().frames == 2);
+  CHECK(vol.Stats().blocks > 0);
+  // Raycast from a third pose at another camera (4:3, smaller, other focal length).
+  const auto out = Cam(64, 48, 50);
+  const scene::Pose p = At(0.05, 0.02, 0.1);
+  const TsdfRaycast r = vol.Raycast(p, out);
+  const auto [hits, err] = HitsAndError(r.depth, scene.Render(p, out).depth);
+  CHECK(hits > 0.9);
+  CHECK(err < 0.01);  // half a voxel of 2 cm
+  // Corners too: z-depth along the optical axis, not the range along the ray.
+  CHECK(r.depth.at<float>(2, 2) == Approx(1.9).margin(0.01));
+  const cv::Vec3f n = r.normals.at<cv::Vec3f>(24, 32);
+  CHECK(n[2] == Approx(-1.0).margin(0.02));
+  CHECK(std::abs(n[0]) < 0.05);
+  // Voxel colour is the plane's texture (in [0, 1]).
+  const cv::Vec3b gt = scene.Render(p, out).rgb.at<cv::Vec3b>(24, 32);
+  CHECK(r.colour.at<cv::Vec3f>(24, 32)[0] * 255.0f == Approx(gt[0]).margin(25));
+}
+
+TEST_CASE("TsdfVolume: a box in front of a wall is hit at both depths from a new pose", "[unit]") {
+  PlaneScene scene;
+  scene.patch_z = 1.5;
+  scene.patch_half = 0.25;
+  const auto cam = Cam(96, 72, 80);
+  TsdfVolume vol;
+  for (double x : {-0.1, 0.0, 0.1}) vol.Integrate(scene.Render(At(x, 0, 0), cam), cam);
+  const scene::Pose p = At(0.05, -0.05, 0.0);
+  const TsdfRaycast r = vol.Raycast(p, cam);
+  const scene::RgbdSample gt = scene.Render(p, cam);
+  CHECK(r.depth.at<float>(36, 48) == Approx(1.5).margin(0.012));   // the box face
+  CHECK(r.depth.at<float>(36, 3) == Approx(2.0).margin(0.012));    // the wall beside it
+  // Away from the box edges every hit is within a voxel.
+  int far_off = 0, hits = 0;
+  for (int v = 0; v < cam.image_height; ++v)
+    for (int u = 0; u < cam.image_width; ++u) {
+      const float z = r.depth.at<float>(v, u);
+      if (z <= 0) continue;
+      ++hits;
+      if (std::abs(z - gt.depth.at<float>(v, u)) > 0.05) ++far_off;
+    }
+  CHECK(hits > 0.8 * cam.image_width * cam.image_height);  // the wall behind the box is unseen
+  CHECK(far_off < 0.06 * hits);  // only the silhouette of the box (measured 4.2 %)
+}
+
+TEST_CASE("TsdfVolume: integration is incremental (a new frame extends what is raycast)", "[unit]") {
+  const PlaneScene scene;
+  const auto cam = Cam(64, 48, 60);
+  TsdfVolume vol;
+  vol.Integrate(scene.Render(At(0, 0, 0), cam), cam);
+  const scene::Pose side = At(0.8, 0, 0);
+  const double before = cv::countNonZero(vol.Raycast(side, cam).depth);
+  vol.Integrate(scene.Render(side, cam), cam);
+  const double after = cv::countNonZero(vol.Raycast(side, cam).depth);
+  CHECK(after > before + 0.2 * cam.image_width * cam.image_height);
+}
+
+TEST_CASE("TsdfVolume: frames of the wrong size or type are refused naming the frame", "[unit]") {
+  TsdfVolume vol;
+  scene::RgbdSample f = PlaneScene().Render(At(0, 0, 0), Cam(32, 24, 30));
+  f.id = "seq-01/frame-7";
+  CHECK_THROWS_WITH(vol.Integrate(f, Cam(64, 48, 60)), Catch::Contains("seq-01/frame-7"));
+  TsdfOptions bad;
+  bad.voxel_size_m = 0;
+  CHECK_THROWS_WITH(bad.Validate(), Catch::Contains("voxel_size_m"));
+}
+
+TEST_CASE("TsdfVolume: Save and Load round trip", "[unit]") {
+  const PlaneScene scene;
+  const auto cam = Cam(48, 36, 45);
+  TsdfVolume vol;
+  vol.Integrate(scene.Render(At(0, 0, 0), cam), cam);
+  const auto dir = std::filesystem::temp_directory_path() / "p2i_tsdf_test";
+  std::filesystem::create_directories(dir);
+  const std::string path = (dir / "volume.npz").string();
+  vol.Save(path);
+  CHECK(std::filesystem::exists(path));
+  CHECK_FALSE(std::filesystem::exists(path + ".tmp.npz"));
+  TsdfVolume back = TsdfVolume::Load(path);
+  const cv::Mat a = vol.Raycast(At(0, 0, 0.1), cam).depth, b = back.Raycast(At(0, 0, 0.1), cam).depth;
+  CHECK(cv::norm(a, b, cv::NORM_INF) < 1e-6);
+  CHECK_THROWS_WITH(TsdfVolume::Load((dir / "missing.npz").string()), Catch::Contains("missing.npz"));
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace p2i::fusion
