@@ -1,7 +1,7 @@
 /// @file fused_scene.h
 /// @brief The slice of the fusion geometry + appearance the refinement's training needs: fuse
 /// frames into a TSDF, keep keyframes, render a view's candidates (fusion/view_candidates.h),
-/// save the TSDF. MakeFusedScene builds it over the fusion code (fused_scene.cc).
+/// save the TSDF. MakeFusedScene builds it over fusion::FusionScene (fused_scene.cc).
 #pragma once
 
 #include <memory>
