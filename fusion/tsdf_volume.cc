@@ -235,8 +235,11 @@ TsdfRaycast TsdfVolume::Raycast(const scene::Pose& pose, const scene::CameraInfo
 
   const core::Tensor k = Intrinsic(camera), e = Extrinsic(pose);
   // Range map (ray start/end per tile of down x down pixels): Open3D's default factor 8, finer for
-  // small images so that a tile does not span a large part of the view.
-  const int down = std::max(1, std::min(8, std::min(w, h) / 16));
+  // small images so that a tile does not span a large part of the view. It must divide both
+  // sizes: otherwise Open3D 0.16 reads past the range map and RayCast hangs now and then (seen
+  // at 80x60 with factor 3, a GOMP_parallel loop that never returns).
+  int down = std::max(1, std::min(8, std::min(w, h) / 16));
+  while (down > 1 && (w % down != 0 || h % down != 0)) --down;
   // Upper bound of the fragments (16 x 16 tiles of the range map) the frustum blocks can need,
   // plus one for Open3D's ">=" check (see the include above).
   const int64_t h_down = (h + down - 1) / down, w_down = (w + down - 1) / down;
