@@ -34,7 +34,7 @@ TEST_CASE("registry: fusion and open3d_tsdf are listed, check options and build 
     CHECK(model::MethodNames().find(name) != std::string::npos);
     auto synth = info.configure(YAML::Load("{tsdf: {voxel_size_m: 0.02}, fill_holes: true}"),
                                 "bench.yaml")(in);
-    const model::View v = synth->Render(At(0.025, 0.0, 0.0));
+    const scene::RgbdSample v = synth->Render(At(0.025, 0.0, 0.0));
     REQUIRE(v.rgb.size() == cv::Size(32, 24));
     CHECK(cv::countNonZero(v.depth > 0.0f) > 0.9 * 32 * 24);
     CHECK_THROWS_WITH(info.configure(YAML::Load("{tsdf: {voxel: 0.02}}"), "bench.yaml"),
