@@ -235,6 +235,19 @@ DatasetIndex ReadCapture(const std::string& folder) {
   }
   const std::string seq = fs::absolute(dir).lexically_normal().filename().string();
   const YAML::Node frames = require("frames");
+  {
+    long long count = -1;
+    try {
+      count = require("frame_count").as<long long>();
+    } catch (const YAML::Exception&) {
+    }
+    if (count < 0 || static_cast<size_t>(count) != frames.size()) {
+      throw std::runtime_error("'" + manifest_path + "': frame_count is " +
+                               require("frame_count").as<std::string>() + " but 'frames' lists " +
+                               std::to_string(frames.size()) +
+                               " (a damaged or hand-edited manifest; make them agree)");
+    }
+  }
   if (frames.size() > poses.size()) {
     throw std::runtime_error("'" + poses_path + "' has " + std::to_string(poses.size()) +
                              " poses but '" + manifest_path + "' lists " +

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <iostream>
 #include <sstream>
 #include <stdexcept>
@@ -41,6 +42,17 @@ Pose Pose::FromMatrix(const Eigen::Matrix4d& m) {
   // Project the rotation block onto SO(3) (datasets store slightly non-orthonormal matrices).
   Eigen::JacobiSVD<Eigen::Matrix3d> svd(m.block<3, 3>(0, 0),
                                         Eigen::ComputeFullU | Eigen::ComputeFullV);
+  // ... but only slightly: a zero, scaled or sheared block is no rotation (7-Scenes files are
+  // orthonormal to ~1e-4; 1e-2 leaves room for any real dataset).
+  const Eigen::Vector3d sv = svd.singularValues();
+  if ((sv - Eigen::Vector3d::Ones()).cwiseAbs().maxCoeff() > 1e-2) {
+    char buf[200];
+    std::snprintf(buf, sizeof(buf),
+                  "Pose::FromMatrix: the rotation block is not a rotation (singular values %.4g "
+                  "%.4g %.4g, must be 1 within 0.01: a zero or scaled block?)",
+                  sv(0), sv(1), sv(2));
+    throw std::invalid_argument(buf);
+  }
   Eigen::Matrix3d r = svd.matrixU() * svd.matrixV().transpose();
   if (r.determinant() < 0) {
     throw std::invalid_argument("Pose::FromMatrix: rotation block is a reflection");
@@ -52,20 +64,48 @@ Pose Pose::FromVector7(const Vector7d& v) {
   return Pose(v.head<3>(), Eigen::Quaterniond(v(6), v(3), v(4), v(5)));
 }
 
+namespace {
+// |norm - 1| allowed for quaternions read from files: the wire's tolerance
+// (msgs::kQuaternionTolerance), so files and messages agree.
+constexpr double kQuaternionNormTolerance = 1e-3;
+}  // namespace
+
 Pose Pose::FromTumLine(const std::string& line, double* stamp) {
+  static const char* const kFields[8] = {"timestamp", "tx", "ty", "tz", "qx", "qy", "qz", "qw"};
   std::istringstream in(line);
-  double s;
-  Vector7d v;
-  if (!(in >> s)) throw std::invalid_argument("TUM line has no timestamp: '" + line + "'");
-  for (int i = 0; i < 7; ++i) {
-    if (!(in >> v(i))) {
-      throw std::invalid_argument("TUM line needs 'timestamp tx ty tz qx qy qz qw', got: '" +
-                                  line + "'");
+  double f[8];
+  std::string word;
+  for (int i = 0; i < 8; ++i) {
+    if (!(in >> word)) {
+      throw std::invalid_argument(i == 0 ? "TUM line has no timestamp: '" + line + "'"
+                                         : "TUM line needs 'timestamp tx ty tz qx qy qz qw', got: '" +
+                                               line + "'");
+    }
+    char* end = nullptr;
+    f[i] = std::strtod(word.c_str(), &end);
+    if (end == word.c_str() || *end != '\0') {
+      throw std::invalid_argument(std::string("TUM line: ") + kFields[i] + " '" + word +
+                                  "' is not a number");
+    }
+    if (!std::isfinite(f[i])) {
+      throw std::invalid_argument(std::string("TUM line: ") + kFields[i] + " is " +
+                                  (std::isnan(f[i]) ? "NaN" : "infinite") + " ('" + word + "')");
     }
   }
-  std::string extra;
-  if (in >> extra) throw std::invalid_argument("TUM line has extra fields: '" + line + "'");
-  if (stamp != nullptr) *stamp = s;
+  if (in >> word) throw std::invalid_argument("TUM line has extra fields: '" + line + "'");
+  const double norm = std::sqrt(f[4] * f[4] + f[5] * f[5] + f[6] * f[6] + f[7] * f[7]);
+  // The same tolerance as the wire (msgs decoder, synthesizer): files agree with messages.
+  if (std::abs(norm - 1.0) > kQuaternionNormTolerance) {
+    char buf[160];
+    std::snprintf(buf, sizeof(buf),
+                  "TUM line: quaternion (qx qy qz qw) has norm %.6g; it must be 1 within %g "
+                  "(write unit quaternions)",
+                  norm, kQuaternionNormTolerance);
+    throw std::invalid_argument(buf);
+  }
+  if (stamp != nullptr) *stamp = f[0];
+  Vector7d v;
+  for (int i = 0; i < 7; ++i) v(i) = f[i + 1];
   return FromVector7(v);
 }
 

@@ -8,6 +8,7 @@
 #include <CLI/CLI.hpp>
 
 #include "eval/bench_runner.h"
+#include "tools/cli_exit.h"
 #include "tools/command.h"
 
 namespace p2i::tools {
@@ -37,7 +38,7 @@ int RunBenchCommand(const std::vector<std::string>& args) {
   try {
     app.parse(rev);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    return CliExit(app, e);
   }
   o.command_line = "p2i";
   for (const auto& a : args) o.command_line += " " + a;

@@ -22,6 +22,7 @@
 #include "model/pose_dependence.h"
 #include "scene/dataset_loader.h"
 #include "scene/image_ops.h"
+#include "tools/cli_exit.h"
 #include "tools/command.h"
 
 namespace p2i::tools {
@@ -115,7 +116,7 @@ int RunExport(const std::vector<std::string>& args) {
   try {
     app.parse(rev);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    return CliExit(app, e);
   }
   const auto parent = std::filesystem::path(out_path).parent_path();
   if (!parent.empty()) std::filesystem::create_directories(parent);

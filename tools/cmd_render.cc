@@ -13,6 +13,7 @@
 #include "scene/capture.h"
 #include "scene/dataset_trajectories.h"
 #include "scene/sim_scene.h"
+#include "tools/cli_exit.h"
 #include "tools/command.h"
 
 namespace p2i::tools {
@@ -40,8 +41,10 @@ int RunRender(const std::vector<std::string>& args) {
                  "more sequences")
       ->required();
   app.add_option("--out,-o", out_dir, "Output folder (receives seq-01, seq-02, ...)")->required();
-  app.add_option("--width", width, "Image width (default 640, or the calibration's)");
-  app.add_option("--height", height, "Image height (default 480, or the calibration's)");
+  app.add_option("--width", width, "Image width (default 640, or the calibration's)")
+      ->check(CLI::Range(1, 8192));
+  app.add_option("--height", height, "Image height (default 480, or the calibration's)")
+      ->check(CLI::Range(1, 8192));
   app.add_option("--camera", camera_file, "ROS camera_info YAML (scaled to --width/--height)");
   app.add_option("--fps", fps,
                  "Frame stamps start + i / fps (default 20, like the paper's videos); 0 keeps "
@@ -57,7 +60,7 @@ int RunRender(const std::vector<std::string>& args) {
   try {
     app.parse(rest);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    return CliExit(app, e);
   }
   if (fps < 0.0 || max_frames < 0 || width < 0 || height < 0) {
     throw std::invalid_argument("--fps, --max-frames, --width and --height must not be negative");

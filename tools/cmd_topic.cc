@@ -1,30 +1,42 @@
 /// @file cmd_topic.cc
-/// @brief `p2i topic list | echo TOPIC | hz TOPIC`, like `ros2 topic`.
+/// @brief `p2i topic list | info | echo | hz | delay | bw TOPIC | pub TOPIC TYPE VALUE`, like
+/// `ros2 topic`.
 ///
 /// Discovery: every publisher that binds writes $P2I_RUN_DIR/registry/<pid>.topic.<name>
 /// (name, type, actual endpoint, node) and removes it when it closes; entries of dead processes
 /// are ignored and cleaned up. `echo`/`hz` find a topic's endpoint there, else use the default
 /// ipc endpoint derived from the name, or --endpoint.
+#include <unistd.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <string>
+#include <thread>
 #include <tuple>
 #include <vector>
 
 #include <CLI/CLI.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
+#include "convert/depth.h"
+#include "convert/image.h"
 #include "msgs/codec.h"
 #include "nodes/runtime/endpoints.h"
 #include "nodes/runtime/graph_discovery.h"
 #include "nodes/runtime/peer_registry.h"
 #include "nodes/runtime/publisher.h"
 #include "nodes/runtime/rate_window.h"
+#include "nodes/runtime/raw_publisher.h"
 #include "nodes/runtime/raw_subscriber.h"
 #include "nodes/runtime/shutdown.h"
+#include "tools/cli_exit.h"
 #include "tools/command.h"
+#include "tools/graph_json.h"
 
 namespace p2i::tools {
 namespace {
@@ -75,6 +87,92 @@ int List(const Graph& graph, bool show_types, bool verbose) {
     printed.push_back(line);
     std::printf("%s\n", line.c_str());
   }
+  if (entries.empty()) {
+    std::fprintf(stderr,
+                 "p2i topic list: no running graph in %s (start one with `p2i launch`, or "
+                 "export the P2I_RUN_DIR that `p2i launch` prints)\n",
+                 runtime::RunDir().c_str());
+  }
+  return 0;
+}
+
+int Info(const Graph& graph, const std::string& topic) {
+  std::string type;
+  std::vector<runtime::RegistryEntry> pubs;
+  for (const auto& e : graph.Entries()) {
+    if (e.kind == "topic" && e.name == topic) {
+      pubs.push_back(e);
+      type = e.type;
+    }
+  }
+  if (pubs.empty()) {
+    std::fprintf(stderr, "p2i topic info: no publisher of %s in %s (p2i topic list shows the "
+                         "topics)\n", topic.c_str(), runtime::RunDir().c_str());
+    return 1;
+  }
+  std::printf("Type: %s\nPublisher count: %zu\n", type.c_str(), pubs.size());
+  for (const auto& e : pubs)
+    std::printf("  %s (pid %d) at %s%s%s\n", e.node.c_str(), e.pid, e.endpoint.c_str(),
+                e.host.empty() ? "" : ", via ", e.host.c_str());
+  std::printf("Subscription count: not known (subscribers connect without registering)\n");
+  return 0;
+}
+
+// Writes the images of a View or RgbdFrame as PNG (depth as 16-bit millimetres).
+void SaveImages(const msgs::WireMessage& m, const std::string& dir, int index) {
+  std::vector<msgs::Image> images;
+  std::string error;
+  msgs::View view;
+  msgs::RgbdFrame frame;
+  if (msgs::Decode(m, &view, &error)) {
+    images = {view.rgb, view.depth};
+  } else if (msgs::Decode(m, &frame, &error)) {
+    images = {frame.rgb, frame.depth};
+  } else {
+    return;  // no images in this message type
+  }
+  std::filesystem::create_directories(dir);
+  const char* names[2] = {"rgb", "depth"};
+  for (size_t i = 0; i < images.size(); ++i) {
+    if (!images[i].data) continue;
+    cv::Mat out;
+    if (images[i].encoding == msgs::pb::RGB8) {
+      cv::cvtColor(convert::RgbToMat(images[i]), out, cv::COLOR_RGB2BGR);
+    } else if (images[i].encoding == msgs::pb::DEPTH16U ||
+               images[i].encoding == msgs::pb::DEPTH32F) {
+      convert::DepthToMetres(images[i]).convertTo(out, CV_16UC1, 1000.0);  // metres -> mm
+    } else {
+      out = convert::ToMat(images[i]);
+    }
+    char name[64];
+    std::snprintf(name, sizeof(name), "%06d_%s.png", index, names[i]);
+    const std::string path = (std::filesystem::path(dir) / name).string();
+    if (!cv::imwrite(path, out)) throw std::runtime_error("cannot write " + path);
+    std::fprintf(stderr, "saved %s\n", path.c_str());
+  }
+}
+
+int Pub(const std::string& topic, const std::string& type, const std::string& value,
+        double rate_hz, int times, const std::string& endpoint) {
+  const msgs::pb::MsgType t = MsgTypeFromName(type);
+  const std::string me = "/p2i_topic_pub_" + std::to_string(::getpid());
+  auto msg = MessageFromText(t, value, me);
+  runtime::PublisherOptions o;
+  o.endpoint = endpoint;
+  runtime::RawPublisher pub(topic, type, me, o);
+  std::printf("publisher: beginning loop on %s (%s)\n", topic.c_str(), pub.Endpoint().c_str());
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));  // let subscribers connect
+  for (int i = 1; (times <= 0 || i <= times) && !runtime::Shutdown::Requested(); ++i) {
+    StampHeader(msg.get(), pub.NextSeq(), 0);
+    msgs::WireMessage w;
+    w.header = msg->SerializeAsString();
+    pub.Publish(w);
+    std::printf("publishing #%d: %s\n", i, msg->ShortDebugString().c_str());
+    std::fflush(stdout);
+    if (times > 0 && i == times) break;
+    runtime::Shutdown::WaitFor(std::chrono::nanoseconds(static_cast<int64_t>(1e9 / rate_hz)));
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));  // let the last one leave
   return 0;
 }
 
@@ -88,26 +186,30 @@ runtime::SubscriberOptions SubOptions(const std::string& topic,
 }
 
 int Echo(const std::string& topic, const std::vector<std::string>& endpoints, int count,
-         double timeout_s) {
+         double timeout_s, const std::string& save_dir) {
   runtime::RawSubscriber sub(topic, SubOptions(topic, endpoints));
   int shown = 0;
-  const auto start = std::chrono::steady_clock::now();
+  // --timeout counts from the last message (or the start): a stream that stops is noticed too.
+  auto last = std::chrono::steady_clock::now();
   while (!runtime::Shutdown::Requested() && (count <= 0 || shown < count)) {
     msgs::WireMessage m;
     msgs::pb::Header h;
     if (!sub.Receive(&m, &h, std::chrono::milliseconds(200))) {
-      if (timeout_s > 0 && std::chrono::steady_clock::now() - start >
+      if (timeout_s > 0 && std::chrono::steady_clock::now() - last >
                                std::chrono::duration<double>(timeout_s)) {
-        std::fprintf(stderr, "p2i topic echo: no message on %s within %.1f s\n", topic.c_str(),
-                     timeout_s);
+        std::fprintf(stderr, "p2i topic echo: no message on %s for %.1f s%s\n", topic.c_str(),
+                     timeout_s, shown > 0 ? " (since the last one)" : "");
         return 1;
       }
       continue;
     }
-    std::string text = msgs::DebugString(m);
+    last = std::chrono::steady_clock::now();
+    std::string text = msgs::DebugString(m);  // images as "<blob N: W x H ENC, B bytes>"
     while (!text.empty() && text.back() == '\n') text.pop_back();
     std::printf("%s\n---\n", text.c_str());
-    std::fflush(stdout);
+    // SIGPIPE is ignored (Shutdown): a closed stdout (`| head`) ends the echo quietly.
+    if (std::fflush(stdout) != 0 || std::ferror(stdout)) return 0;
+    if (!save_dir.empty()) SaveImages(m, save_dir, shown);
     ++shown;
   }
   if (sub.Stats().malformed.load() > 0) {
@@ -248,10 +350,31 @@ int RunTopic(const std::vector<std::string>& args) {
   echo->add_flag("--once", once, "Print one message and exit");
   echo->add_option("-n,--count", count, "Print N messages and exit");
   echo->add_option("--endpoint", endpoints, "Connect here instead of the discovered endpoint");
-  echo->add_option("--timeout", timeout_s, "Fail if nothing arrives within S seconds (0 = wait)");
+  echo->add_option("--timeout", timeout_s, "Fail if no message arrives for S seconds, counted from the last message (0 = wait)");
 
   size_t window = 10000;
   double duration_s = 0;
+  std::string save_dir;
+  echo->add_option("--save-image", save_dir,
+                   "Write the images of View / RgbdFrame messages to DIR as PNG "
+                   "(NNNNNN_rgb.png, NNNNNN_depth.png: 16-bit mm)");
+  auto* info = app.add_subcommand("info", "Print a topic's type and publishers");
+  info->add_option("topic", topic, "Topic name (absolute, or relative to /)")->required();
+  std::string type, value, pub_endpoint;
+  double rate_hz = 1.0;
+  int times = 0;
+  bool pub_once = false;
+  auto* pub = app.add_subcommand("pub", "Publish a message (YAML/JSON) on a topic");
+  pub->add_option("topic", topic, "Topic name (absolute, or relative to /)")->required();
+  pub->add_option("type", type, "Message type, e.g. PoseStamped, PoseRequest")->required();
+  pub->add_option("value", value, "The message as YAML/JSON (fields of msgs/p2i.proto), e.g. "
+                                  "'{pose: {position: {z: 1}, orientation: {w: 1}}}'");
+  pub->add_option("-r,--rate", rate_hz, "Messages per second (default 1)")
+      ->check(CLI::PositiveNumber);
+  pub->add_option("-t,--times", times, "Publish N messages and exit (0 = until Ctrl-C)")
+      ->check(CLI::NonNegativeNumber);
+  pub->add_flag("-1,--once", pub_once, "Publish one message and exit");
+  pub->add_option("--endpoint", pub_endpoint, "Bind here instead of the default endpoint");
   auto* hz = app.add_subcommand("hz", "Print the publishing rate of a topic");
   hz->add_option("topic", topic, "Topic name (absolute, or relative to /)")->required();
   hz->add_option("-w,--window", window, "Number of periods in the statistics window");
@@ -259,7 +382,7 @@ int RunTopic(const std::vector<std::string>& args) {
   hz->add_option("--duration", duration_s, "Stop after S seconds (0 = until Ctrl-C)");
   auto* delay = app.add_subcommand("delay", "Print the delay from publication to receipt");
   auto* bw = app.add_subcommand("bw", "Print the bandwidth used by a topic");
-  for (auto* sub : {list, echo, hz, delay, bw}) {
+  for (auto* sub : {list, info, echo, hz, delay, bw}) {
     sub->add_option("--peer", peers,
                     "Registry of another host's launch, tcp://ADDRESS:PORT (repeatable; "
                     "default $P2I_PEERS)");
@@ -274,19 +397,24 @@ int RunTopic(const std::vector<std::string>& args) {
   try {
     app.parse(rest);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    return CliExit(app, e);
   }
   runtime::Shutdown::InstallSignalHandlers();
   if (!peers.empty()) g_peers = peers;
   if (list->parsed()) return List(Graph{g_peers}, show_types, verbose);
   if (delay->parsed() || bw->parsed())
     return DelayOrBw(delay->parsed(), Absolute(topic), endpoints, duration_s);
-  if (echo->parsed()) return Echo(Absolute(topic), endpoints, once ? 1 : count, timeout_s);
+  if (echo->parsed())
+    return Echo(Absolute(topic), endpoints, once ? 1 : count, timeout_s, save_dir);
+  if (info->parsed()) return Info(Graph{g_peers}, Absolute(topic));
+  if (pub->parsed())
+    return Pub(Absolute(topic), type, value, rate_hz, pub_once ? 1 : times, pub_endpoint);
   return Hz(Absolute(topic), endpoints, window, duration_s);
 }
 
 }  // namespace
 
-P2I_COMMAND("topic", "Inspect topics: list | echo | hz | delay | bw TOPIC", RunTopic);
+P2I_COMMAND("topic", "Inspect topics: list | info | echo | hz | delay | bw TOPIC | pub TOPIC TYPE VALUE",
+            RunTopic);
 
 }  // namespace p2i::tools

@@ -15,6 +15,7 @@
 #include "scene/builtin_dataset.h"
 #include "scene/dataset_loader.h"
 #include "scene/splits.h"
+#include "tools/cli_exit.h"
 #include "tools/command.h"
 
 namespace p2i::tools {
@@ -76,14 +77,17 @@ int RunTrain(const std::vector<std::string>& args) {
                  "camera, as the synthesizer's dataset parameter) or procedural (an analytic "
                  "test room)")
       ->required();
-  app.add_option("--split", split_file, "split YAML (p2i split / scene/splits.h): train on its train ids, validate on its test ids");
+  app.add_option("--split", split_file, "split YAML (docs/DATASETS.md, scene/splits.h): train on its train ids, validate on its "
+                 "test ids");
   app.add_option("--out", out_dir, "output directory")->required();
   app.add_option("--phase", phase, "0 = both phases (default), 1 or 2")->check(CLI::Range(0, 2));
-  app.add_option("--steps", steps, "train each phase run up to this step (default: config)");
+  app.add_option("--steps", steps, "train each phase run up to this step (default: config)")
+      ->check(CLI::Range(0, 1 << 30));
   app.add_option("--threads", threads, "LibTorch threads")->check(CLI::PositiveNumber);
   app.add_option("--frames", frames,
                  "builtin: at most this many frames, evenly spaced along the sweep; procedural: "
-                 "number of frames");
+                 "number of frames")
+      ->check(CLI::Range(1, 1 << 20));
   app.add_option("--holdout-every", holdout_every,
                  "without --split: every N-th frame is held out for validation PSNR");
   app.add_flag("--resume", resume, "continue exactly from DIR/checkpoint.pt");
@@ -106,7 +110,7 @@ int RunTrain(const std::vector<std::string>& args) {
   try {
     app.parse(rev);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    return CliExit(app, e);
   }
   const model::P2iConfig config = model::P2iConfig::FromYamlFile(config_path);
   scene::RgbdDataset all;

@@ -14,6 +14,9 @@
 namespace p2i::nodes {
 namespace {
 
+// Larger than any camera the nodes serve (and than the wire's image limits allow to decode).
+constexpr int kMaxImageSide = 8192;
+
 std::chrono::nanoseconds Period(double rate_hz) {
   return std::chrono::nanoseconds(static_cast<int64_t>(1e9 / rate_hz));
 }
@@ -72,6 +75,12 @@ void CameraNode::SetUpSim() {
   if (!(rate_ > 0.0) || width < 0 || height < 0) {
     throw runtime::StartupError("rate must be > 0, width and height >= 0");
   }
+  if (width > kMaxImageSide || height > kMaxImageSide) {
+    throw runtime::StartupError("width " + std::to_string(width) + " x height " +
+                                std::to_string(height) + ": at most " +
+                                std::to_string(kMaxImageSide) + " pixels a side");
+  }
+  ParametersDone();
   try {
     sim_.emplace(scene::SimScene::FromSpec(scene_spec));
     if (kinect) sim_->set_sensor_options(scene::SimSensorOptions::Kinect());
@@ -157,6 +166,11 @@ void CameraNode::SetUpReplay() {
   if ((out_width_ > 0) != (out_height_ > 0) || out_width_ < 0) {
     throw runtime::StartupError("width and height must both be set (> 0) or both be 0");
   }
+  if (out_width_ > kMaxImageSide || out_height_ > kMaxImageSide) {
+    throw runtime::StartupError("width and height: at most " + std::to_string(kMaxImageSide) +
+                                " pixels a side");
+  }
+  ParametersDone();
   try {
     scene::DatasetOptions options;
     options.format = format;
@@ -243,6 +257,11 @@ void CameraNode::SetUpLive(const std::string& backend) {
       Declare<double>("stamp_offset", 0.0, "s subtracted from the host reception stamp");
   const int buffers = Declare<int>("buffers", backend == "aravis" ? 8 : 4, "stream buffers");
   if (width < 0 || height < 0) throw runtime::StartupError("width and height must be >= 0");
+  if (width > kMaxImageSide || height > kMaxImageSide) {
+    throw runtime::StartupError("width and height: at most " + std::to_string(kMaxImageSide) +
+                                " pixels a side");
+  }
+  ParametersDone();
   if (pose_mode != "topic" && pose_mode != "none") {
     throw runtime::StartupError("pose_mode '" + pose_mode + "' must be topic or none");
   }

@@ -47,6 +47,7 @@ MonitorNode::MonitorNode(const runtime::NodeArgs& args) : Node("monitor", args) 
   if (duration_s_ < 0 || width <= 0 || height <= 0 || score_every_ < 1) {
     throw runtime::StartupError("duration >= 0, camera_width/height > 0, score_every >= 1");
   }
+  ParametersDone();
   try {
     sim_.emplace(scene::SimScene::FromSpec(scene_spec));
   } catch (const std::exception& e) {

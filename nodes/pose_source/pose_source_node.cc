@@ -50,6 +50,7 @@ PoseSourceNode::PoseSourceNode(const runtime::NodeArgs& args) : Node("pose_sourc
     throw runtime::StartupError("rate must be > 0 and planned_rate >= 0");
   }
   if (planned_rate == 0.0) planned_rate = rate;
+  ParametersDone();
 
   try {
     measured_ = LoadOne(spec, index, scene_spec, "trajectory");

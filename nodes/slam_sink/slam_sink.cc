@@ -38,6 +38,8 @@ void SlamSink::WriteCamera(const scene::CameraInfo& camera) {
   // scene::ReadTumRgbd (and our dataset loader) take the calibration from this file.
   camera.ToYamlFile((std::filesystem::path(options_.writer.out_dir) / "camera_info.yaml").string());
   camera_written_ = true;
+  camera_ = camera;
+  camera_size_ = {camera.image_width, camera.image_height};
 }
 
 bool SlamSink::SetCamera(const scene::CameraInfo& camera) {
@@ -49,6 +51,22 @@ bool SlamSink::SetCamera(const scene::CameraInfo& camera) {
 
 SlamSink::Outcome SlamSink::Process(const SinkFrame& frame) {
   if (closed_) throw std::logic_error("SlamSink::Process after Close");
+  if (camera_written_ && written_frames_ == 0 && !frame.rgb.empty() &&
+      (frame.rgb.cols != camera_size_.first || frame.rgb.rows != camera_size_.second)) {
+    // The first view fixes the sequence's image size: camera_info.yaml must describe it (p2i's
+    // own reader refuses a sequence whose calibration has another size), so it is rewritten
+    // for the views' size (same field of view) -- as the odometry check scales it too.
+    WriteCamera(camera_.Scaled(frame.rgb.cols, frame.rgb.rows));
+  }
+  if (camera_written_ && (frame.rgb.cols != camera_size_.first || frame.rgb.rows != camera_size_.second)) {
+    // A later view of another size: the sequence's camera_info.yaml would not describe it.
+    throw std::invalid_argument(
+        "view " + std::to_string(frame.rgb.cols) + "x" + std::to_string(frame.rgb.rows) +
+        " does not match the sequence's camera_info " + std::to_string(camera_size_.first) + "x" +
+        std::to_string(camera_size_.second) +
+        " (set by the sequence's first view): one sequence holds views of one size");
+  }
+  ++written_frames_;
   Outcome outcome;
   ++received_;
   outcome.sequence = tracker_.Observe(frame.source, frame.seq, &outcome.gap, frame.publish_stamp_ns);

@@ -81,6 +81,9 @@ class SlamSink {
   uint64_t dropped_ = 0;
   uint64_t write_errors_ = 0;
   bool camera_written_ = false;
+  std::pair<int, int> camera_size_{0, 0};  // width, height of camera_info.yaml
+  scene::CameraInfo camera_;               // as given (rescaled to the first view's size)
+  uint64_t written_frames_ = 0;            // frames past the size check
   bool closed_ = false;
 };
 

@@ -49,6 +49,7 @@ SlamSinkNode::SlamSinkNode(const runtime::NodeArgs& args) : runtime::Node("slam_
   const double summary_period =
       Declare<double>("summary_period", 5.0, "rewrite summary.json every N s (0 = at exit)");
 
+  ParametersDone();  // unknown parameters and --help stop here, before out_dir is created
   std::optional<scene::CameraInfo> camera;
   if (!camera_info_file.empty()) camera = scene::CameraInfo::FromYamlFile(camera_info_file);
   sink_ = std::make_unique<SlamSink>(o, camera);

@@ -22,6 +22,7 @@ SynthesizerNode::SynthesizerNode(const runtime::NodeArgs& args)
   SynthesizerCoreOptions& core_options = options.core;
   const std::string& checkpoint = options.checkpoint;
   const std::string& dataset = options.dataset;
+  ParametersDone();  // unknown parameters / --help stop here, before any data is loaded
   std::shared_ptr<const model::CoverageScorer> coverage;
   SynthesizerLoader loader;
   try {

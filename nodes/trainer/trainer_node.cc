@@ -40,6 +40,8 @@ TrainerNode::TrainerNode(const runtime::NodeArgs& args) : Node("trainer", args) 
       Declare<double>("trainer_status_period", 1.0, "s between TrainerStatus messages");
   shutdown_wait_s_ = Declare<double>(
       "shutdown_wait", 2.0, "s after which a shutdown still waiting for the training step logs it");
+  if (threads < 1) throw runtime::StartupError("parameter 'threads' must be >= 1, got " + std::to_string(threads));
+  ParametersDone();
 
   model::P2iConfig config =
       config_file.empty() ? model::P2iConfig() : model::P2iConfig::FromYamlFile(config_file);

@@ -10,7 +10,7 @@ using p2i::runtime::StartupError;
 TEST_CASE("NodeArgs parses every part of the contract", "[unit]") {
   const auto a = NodeArgs::Parse(std::vector<std::string>{
       "--name", "cam", "--namespace", "/robot", "--params-file", "a.yaml",
-      "--params-file=b.yaml", "-r", "pose:=/slam/pose", "rate:=30", "size:=[64,64]", "extra"});
+      "--params-file=b.yaml", "-r", "pose:=/slam/pose", "rate:=30", "size:=[64,64]"});
   CHECK(a.name == "cam");
   CHECK(a.node_namespace == "/robot");
   REQUIRE(a.params_files.size() == 2);
@@ -21,8 +21,24 @@ TEST_CASE("NodeArgs parses every part of the contract", "[unit]") {
   REQUIRE(a.overrides.size() == 2);
   CHECK(a.overrides[1].first == "size");
   CHECK(a.overrides[1].second == "[64,64]");
-  REQUIRE(a.extra.size() == 1);
-  CHECK(a.extra[0] == "extra");
+  CHECK(a.extra.empty());
+  CHECK_FALSE(a.help);
+}
+
+TEST_CASE("NodeArgs refuses tokens that are neither NAME:=VALUE nor a known flag", "[unit]") {
+  CHECK_THROWS_WITH(NodeArgs::Parse(std::vector<std::string>{"rate=10"}),
+                    Catch::Contains("'rate=10'") && Catch::Contains("did you mean rate:=10"));
+  CHECK_THROWS_AS(NodeArgs::Parse(std::vector<std::string>{"extra"}), StartupError);
+  CHECK_THROWS_AS(NodeArgs::Parse(std::vector<std::string>{"--verbose"}), StartupError);
+  const auto h = NodeArgs::Parse(std::vector<std::string>{"--help", "--version"});
+  CHECK(h.help);
+  CHECK(h.version);
+  // ROS 2 spellings.
+  const auto r = NodeArgs::Parse(
+      std::vector<std::string>{"--ros-args", "-p", "rate:=10", "--remap", "a:=b", "--"});
+  REQUIRE(r.overrides.size() == 1);
+  CHECK(r.overrides[0].second == "10");
+  CHECK(r.remaps.size() == 1);
 }
 
 TEST_CASE("NodeArgs rejects a malformed remap and a flag without value", "[unit]") {

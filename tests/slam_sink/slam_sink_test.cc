@@ -4,6 +4,8 @@
 
 #include <fstream>
 
+#include <opencv2/imgproc.hpp>
+
 #include <catch2/catch.hpp>
 
 #include "scene/tum_rgbd.h"
@@ -152,4 +154,30 @@ TEST_CASE("SlamSinkOptions parse YAML and name unknown keys", "[unit]") {
 }
 
 }  // namespace
+}  // namespace p2i::slam_sink
+
+namespace p2i::slam_sink {
+
+TEST_CASE("SlamSink's camera_info.yaml matches the views it writes", "[unit]") {
+  TempDir dir("camera_size");
+  SlamSinkOptions options;
+  options.writer.out_dir = dir.str();
+  options.check = false;
+  SlamSink sink(options, SmallCamera(640, 480));  // a 640x480 calibration, 160x120 views
+  const scene::Pose a = BasePose();
+  CHECK(sink.Process(RenderedFrame(a, 1.0, 0)).written);
+  const auto written = scene::CameraInfo::FromYamlFile(dir.str() + "/camera_info.yaml");
+  CHECK(written.image_width == 160);
+  CHECK(written.image_height == 120);
+  CHECK(written.fx() == Approx(SmallCamera(640, 480).fx() / 4));
+  // A later view of another size is refused, naming both sizes.
+  SinkFrame other = RenderedFrame(Moved(a, 0.01, 0, 0), 1.1, 1);
+  cv::resize(other.rgb, other.rgb, cv::Size(80, 60));
+  cv::resize(other.depth, other.depth, cv::Size(80, 60), 0, 0, cv::INTER_NEAREST);
+  CHECK_THROWS_WITH(sink.Process(other), Catch::Contains("80x60") && Catch::Contains("160x120"));
+  sink.Close();
+  // The sequence reads back with p2i's own reader.
+  CHECK(scene::ReadTumRgbd(dir.str()).size() == 1);
+}
+
 }  // namespace p2i::slam_sink
