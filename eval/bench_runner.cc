@@ -13,6 +13,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <stdexcept>
 #include <memory>
 #include <optional>
 #include <random>
@@ -168,13 +169,13 @@ scene::Split MakeSplit(const BenchConfig& c, const scene::DatasetIndex& index,
   if (setting.split == scene::SplitSetting::kMissingFrames) {
     split = scene::MakeMissingFramesSplit(index, setting.held_out, c.period);
     if (split.test.empty())
-      throw std::runtime_error(c.source + ": setting " + setting.Name() +
+      throw std::invalid_argument(c.source + ": setting " + setting.Name() +
                                " holds out no frame (every sequence is shorter than period + N = " +
                                std::to_string(c.period + setting.held_out) +
                                " frames): lower 'period' or use more frames");
   } else if (setting.split == scene::SplitSetting::kAdjacentTrajectory) {
     if (seqs.size() < 2 && c.b_train.empty())
-      throw std::runtime_error(c.source + ": setting b needs 2 sequences; the data has " +
+      throw std::invalid_argument(c.source + ": setting b needs 2 sequences; the data has " +
                                std::to_string(seqs.size()) + " (add split_b or trajectories)");
     split = scene::MakeAdjacentTrajectorySplit(index, c.b_train.empty() ? seqs[0] : c.b_train,
                                                c.b_test.empty() ? seqs[1] : c.b_test);
@@ -182,7 +183,7 @@ scene::Split MakeSplit(const BenchConfig& c, const scene::DatasetIndex& index,
     std::vector<std::string> train = c.c_train, test = c.c_test;
     if (train.empty()) {
       if (seqs.size() < 3)
-        throw std::runtime_error(c.source + ": setting c needs 3 sequences by default; the data has " +
+        throw std::invalid_argument(c.source + ": setting c needs 3 sequences by default; the data has " +
                                  std::to_string(seqs.size()) + " (add split_c: {train, test})");
       test = {seqs[seqs.size() / 2]};
       for (const auto& s : seqs)
@@ -472,8 +473,12 @@ int RunBench(const BenchOptions& options) {
     for (const auto& setting : c.settings)
       for (const auto& size : c.sizes)
         for (const auto& m : c.methods) total += c.RunsOf(m, setting, size).size();
+    // Every setting's split first: a setting the data cannot run fails before the first row.
+    std::map<std::string, scene::Split> splits;
+    for (const auto& setting : c.settings)
+      splits[setting.Name()] = MakeSplit(c, data->index, setting);
     for (const auto& setting : c.settings) {
-      const scene::Split split = MakeSplit(c, data->index, setting);
+      const scene::Split& split = splits.at(setting.Name());
       split.ToYamlFile((fs::path(out_dir) / "splits" / (setting.Name() + ".yaml")).string());
       const auto test_ids = Subsample(split.test, static_cast<size_t>(c.max_test_views));
       const auto strip_ids = Subsample(test_ids, static_cast<size_t>(c.strip_views));

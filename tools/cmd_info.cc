@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "recording/mcap_reader.h"
+#include "tools/cli_exit.h"
 #include "tools/command.h"
 
 namespace p2i::tools {
@@ -47,7 +48,7 @@ int RunInfo(const std::vector<std::string>& args) {
   try {
     app.parse(rest);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    return CliExit(app, e);
   }
   recording::McapReader reader;
   std::string error;

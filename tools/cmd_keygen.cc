@@ -6,12 +6,14 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
 #include <CLI/CLI.hpp>
 
 #include "nodes/runtime/curve_auth.h"
+#include "tools/cli_exit.h"
 #include "tools/command.h"
 
 namespace p2i::tools {
@@ -75,7 +77,7 @@ int RunKeygen(const std::vector<std::string>& args) {
   try {
     app.parse(rest);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    return CliExit(app, e);
   }
   try {
     if (!init.empty()) return Init(init);
@@ -96,7 +98,10 @@ int RunKeygen(const std::vector<std::string>& args) {
     std::printf("wrote %s (secret, 0600) and %s/%s.pub\npublic key: %s\n", key.c_str(),
                 dir.c_str(), name.c_str(), k.public_z85.c_str());
     return 0;
-  } catch (const std::exception& e) {
+  } catch (const std::invalid_argument& e) {  // a bad option value: usage/config (exit 2)
+    std::fprintf(stderr, "p2i keygen: error: %s\n", e.what());
+    return 2;
+} catch (const std::exception& e) {
     std::fprintf(stderr, "p2i keygen: error: %s\n", e.what());
     return 1;
   }

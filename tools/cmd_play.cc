@@ -2,6 +2,7 @@
 /// @brief `p2i play FILE.mcap [--rate R] [--loop] [--topics ...] [--start S]`, like
 /// `ros2 bag play`: republishes the recorded p2i topics with the recorded timing.
 #include <cstdio>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -9,6 +10,7 @@
 
 #include "nodes/runtime/shutdown.h"
 #include "recording/player.h"
+#include "tools/cli_exit.h"
 #include "tools/command.h"
 
 namespace p2i::tools {
@@ -27,7 +29,7 @@ int RunPlay(const std::vector<std::string>& args) {
   try {
     app.parse(rest);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    return CliExit(app, e);
   }
   for (auto& t : o.topics)
     if (!t.empty() && t[0] != '/') t = "/" + t;
@@ -46,7 +48,10 @@ int RunPlay(const std::vector<std::string>& args) {
                  static_cast<unsigned long long>(s.unreadable));
     if (!s.stop_reason.empty())
       std::fprintf(stderr, "p2i play: the recording ends early: %s\n", s.stop_reason.c_str());
-  } catch (const std::exception& e) {
+  } catch (const std::invalid_argument& e) {  // a bad option value: usage/config (exit 2)
+    std::fprintf(stderr, "p2i play: %s\n", e.what());
+    return 2;
+} catch (const std::exception& e) {
     std::fprintf(stderr, "p2i play: %s\n", e.what());
     return 1;
   }

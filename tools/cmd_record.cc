@@ -2,6 +2,7 @@
 /// @brief `p2i record [TOPIC... | -a] -o FILE.mcap`, like `ros2 bag record` (docs/RECORDING.md).
 #include <chrono>
 #include <cstdio>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -9,6 +10,7 @@
 
 #include "nodes/runtime/shutdown.h"
 #include "recording/recorder.h"
+#include "tools/cli_exit.h"
 #include "tools/command.h"
 
 namespace p2i::tools {
@@ -28,7 +30,7 @@ int RunRecord(const std::vector<std::string>& args) {
   app.add_flag("--overwrite", o.overwrite, "Replace the output file if it exists");
   app.add_flag("--foxglove", o.foxglove,
                "Also write Foxglove channels (RawImage, CameraCalibration, FrameTransform, "
-               "PoseInFrame) beside the p2i ones");
+               "PoseInFrame) beside p2i's own channels");
   app.add_option("--compression", compression, "zstd | lz4 | none")
       ->check(CLI::IsMember({"zstd", "lz4", "none"}));
   app.add_option("--compression-level", o.mcap.compression_level, "zstd level (1 = fastest)");
@@ -42,7 +44,7 @@ int RunRecord(const std::vector<std::string>& args) {
   try {
     app.parse(rest);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    return CliExit(app, e);
   }
   o.mcap.compression = compression == "none" ? "" : compression;
   o.mcap.chunk_size = static_cast<size_t>(chunk_mb * (1 << 20));
@@ -74,7 +76,10 @@ int RunRecord(const std::vector<std::string>& args) {
     }
     if (!rec.LastError().empty())
       std::fprintf(stderr, "p2i record: last unwritable message: %s\n", rec.LastError().c_str());
-  } catch (const std::exception& e) {
+  } catch (const std::invalid_argument& e) {  // a bad option value: usage/config (exit 2)
+    std::fprintf(stderr, "p2i record: %s\n", e.what());
+    return 2;
+} catch (const std::exception& e) {
     std::fprintf(stderr, "p2i record: %s\n", e.what());
     return 1;
   }

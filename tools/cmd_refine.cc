@@ -16,6 +16,7 @@
 #include "refine/evaluation.h"
 #include "scene/dataset_loader.h"
 #include "scene/splits.h"
+#include "tools/cli_exit.h"
 #include "tools/command.h"
 
 namespace p2i::tools {
@@ -45,7 +46,7 @@ int RunTrainSim(const std::vector<std::string>& args) {
   try {
     app.parse(rev);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    return CliExit(app, e);
   }
   const auto parent = std::filesystem::path(out).parent_path();
   if (!parent.empty()) std::filesystem::create_directories(parent);
@@ -87,7 +88,7 @@ int RunEval(const std::vector<std::string>& args) {
   try {
     app.parse(rev);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    return CliExit(app, e);
   }
   const scene::DatasetIndex index = scene::OpenDataset(data);
   nlohmann::json all = nlohmann::json::array();
@@ -119,9 +120,10 @@ int RunRefine(const std::vector<std::string>& args) {
     return RunTrainSim(std::vector<std::string>(args.begin() + 1, args.end()));
   if (args.size() >= 2 && args[1] == "eval")
     return RunEval(std::vector<std::string>(args.begin() + 1, args.end()));
-  std::fprintf(stderr, "usage: p2i refine train-sim --out FILE [options] | p2i refine eval "
+  const bool help = args.size() >= 2 && (args[1] == "--help" || args[1] == "-h");
+  std::fprintf(help ? stdout : stderr, "usage: p2i refine train-sim --out FILE [options] | p2i refine eval "
                        "--data DIR --net FILE [options] (--help on each)\n");
-  return 2;
+  return help ? 0 : 2;
 }
 
 P2I_COMMAND("refine", "Train (sim, cross-scene) and evaluate the fusion method's refinement net",

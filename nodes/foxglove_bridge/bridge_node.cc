@@ -41,6 +41,7 @@ BridgeNode::BridgeNode(const runtime::NodeArgs& args) : Node("foxglove_bridge", 
   } catch (const std::invalid_argument& e) {
     throw runtime::StartupError(e.what());
   }
+  ParametersDone();  // --help and unknown parameters stop here, before the port is bound
   server_ = std::make_unique<WsServer>(options_.server, [this](uint32_t channel) {
     GetExecutor().Post([this, channel] { EnsureSubscribed(channel); });
   });

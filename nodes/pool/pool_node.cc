@@ -22,12 +22,11 @@ PoolNode::PoolNode(const runtime::NodeArgs& args) : Node("pool", args) {
   if (idle_expiry <= 0) throw runtime::StartupError("parameter 'idle_expiry' must be > 0");
   if (max_queue <= 0) throw runtime::StartupError("parameter 'max_queue' must be > 0");
 
+  ParametersDone();  // --help and unknown parameters stop here, before anything is bound
   const std::string resolved = Resolve(service);
   PoolBrokerOptions o;
-  const auto eps = Declare<std::map<std::string, std::string>>("endpoints", {}, "");
-  auto it = eps.find(resolved);
-  if (it == eps.end()) it = eps.find(service);
-  o.frontend = it != eps.end() ? it->second : runtime::DefaultEndpoint("service", resolved);
+  const std::string given_endpoint = EndpointFor(service, resolved);  // `endpoints` entry
+  o.frontend = given_endpoint.empty() ? runtime::DefaultEndpoint("service", resolved) : given_endpoint;
   o.backend = backend.empty() ? runtime::DefaultEndpoint("pool", resolved) : backend;
   o.worker_timeout = std::chrono::milliseconds(static_cast<int64_t>(worker_timeout * 1000));
   o.idle_expiry = std::chrono::milliseconds(static_cast<int64_t>(idle_expiry * 1000));
@@ -38,7 +37,7 @@ PoolNode::PoolNode(const runtime::NodeArgs& args) : Node("pool", args) {
   });
   runtime::RegistryEntry entry{"service", resolved, type, broker_->FrontendEndpoint(),
                                FullName(), 0, "", ""};
-  if (it == eps.end())  // multi-host launch: reachable from the other hosts too
+  if (given_endpoint.empty())  // multi-host launch: reachable from the other hosts too
     entry.remote_endpoint = runtime::BindHostEndpoint(broker_->Frontend(), "pool frontend");
   registry_path_ = runtime::Registry::Register(entry);
   GetExecutor().AddSocket(&broker_->Frontend(), [this] { broker_->OnFrontend(); });

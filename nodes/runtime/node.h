@@ -211,11 +211,13 @@ class Node {
  protected:
   /// Called once after the loop stops and before sockets close (flush files here).
   virtual void OnShutdown() {}
+  /// The `endpoints` entry for a topic/service (resolved name first, then as given), or "".
+  /// Marks the name used: an `endpoints` key no lookup asked for is a start-up error.
+  std::string EndpointFor(const std::string& given, const std::string& resolved) const;
 
  private:
   /// Under --help: throws HelpRequested (nothing may be created).
   void BeforeSideEffect() const;
-  std::string EndpointFor(const std::string& given, const std::string& resolved) const;
   void Close();
 
   NodeArgs args_;

@@ -127,7 +127,7 @@ TEST_CASE("nodes: --help, --version, bad tokens, ROS 2 parameter files, exit cod
   ScopedRunDir run_dir;
   int code = -1;
   for (const char* exe : {"p2i_camera", "p2i_pose_source", "p2i_slam_sink", "p2i_synthesizer",
-                          "p2i_trainer", "p2i_monitor"}) {
+                          "p2i_trainer", "p2i_monitor", "p2i_pool", "p2i_foxglove_bridge"}) {
     INFO(exe);
     const std::string help = Run(Bin(exe) + " --help", &code);
     CHECK(code == 0);
@@ -140,6 +140,25 @@ TEST_CASE("nodes: --help, --version, bad tokens, ROS 2 parameter files, exit cod
   }
   CHECK_THAT(Run(Bin("p2i_pose_source") + " --help", &code),
              Catch::Contains("rate (double, default 20)"));
+  // --help binds nothing (the pool's frontend, the bridge's port are not opened).
+  CHECK_THAT(Run(Bin("p2i_pool") + " --help", &code), Catch::Contains("max_queue (int"));
+  CHECK_THAT(Run(Bin("p2i_foxglove_bridge") + " --help port_file:=" + run_dir.Path() + "/port", &code),
+             Catch::Contains("port (int, default 8765)"));
+  CHECK_FALSE(fs::exists(run_dir.Path() + "/port"));
+  CHECK((!fs::exists(run_dir.Path() + "/registry") || fs::is_empty(run_dir.Path() + "/registry")));
+  // The pool's `endpoints` entry for its service is its frontend; other keys are errors.
+  CHECK_THAT(Run(Bin("p2i_pool") + " 'endpoints:={rendr: \"ipc:///tmp/x\"}'", &code),
+             Catch::Contains("'rendr'") && Catch::Contains("/render"));
+  CHECK(code == 2);
+  {
+    const std::string frontend = "ipc://" + run_dir.Path() + "/my_pool.ipc";
+    Process pool({Bin("p2i_pool"), "endpoints:={render: \"" + frontend + "\"}"});
+    REQUIRE(pool.pid() > 0);
+    CHECK(WaitUntil([&] {
+      return Run(Bin("p2i") + " service list -t 2>&1", &code).find("/render") != std::string::npos &&
+             Run(Bin("p2i") + " topic list -v 2>&1", &code).find(frontend) != std::string::npos;
+    }, std::chrono::seconds(20)));
+  }
   // slam_sink validates before it creates anything.
   const fs::path out = fs::path(run_dir.Path()) / "sink";
   CHECK_THAT(Run(Bin("p2i_slam_sink") + " out_dir:=" + out.string() + " zz:=1", &code),
@@ -215,7 +234,7 @@ TEST_CASE("values accepted before are refused with exit 2", "[integration]") {
              Catch::Contains("at most 8192"));
   CHECK(code == 2);
   CHECK_THAT(Run(Bin("p2i_synthesizer") + " method:=nearest threads:=-2", &code),
-             Catch::Contains("'threads' must be >= 1"));
+             Catch::Contains("threads must be >= 1 (got -2)"));
   CHECK(code == 2);
   CHECK_THAT(Run(Bin("p2i_trainer") + " threads:=-2", &code), Catch::Contains("'threads' must be >= 1"));
   CHECK(code == 2);
