@@ -261,6 +261,30 @@ void CameraNode::SetUpLive(const std::string& backend) {
     throw runtime::StartupError("width and height: at most " + std::to_string(kMaxImageSide) +
                                 " pixels a side");
   }
+  // Each backend's own parameters are declared before ParametersDone(), so that they are known
+  // (and shown by --help) before anything is opened.
+  AravisOptions aravis;
+  LibcameraOptions libcamera;
+  if (backend == "aravis") {
+    aravis.device = Declare<std::string>("device", "", "Aravis device id or IP; empty = the first");
+    aravis.pixel_format = Declare<std::string>(
+        "pixel_format", "", "Mono8 | Mono16 | RGB8 | BGR8 | Bayer{RG,GR,GB,BG}8; empty = keep");
+    aravis.width = width;
+    aravis.height = height;
+    aravis.frame_rate = Declare<double>("frame_rate", 0.0, "Hz; 0 = the device's");
+    aravis.exposure_us = Declare<double>("exposure_us", 0.0, "us; 0 = the device's");
+    aravis.depth_device =
+        Declare<std::string>("depth_device", "", "second device streaming Mono16 depth");
+    aravis.depth_scale = Declare<double>("depth_scale", 0.001, "metres per depth unit");
+    aravis.depth_tolerance = Declare<double>(
+        "depth_tolerance", 0.02, "s: max stamp difference between colour and depth");
+    aravis.buffers = buffers;
+  } else {
+    libcamera.camera = Declare<std::string>("camera", "", "libcamera camera id; empty = the first");
+    libcamera.width = width;
+    libcamera.height = height;
+    libcamera.buffers = buffers;
+  }
   ParametersDone();
   if (pose_mode != "topic" && pose_mode != "none") {
     throw runtime::StartupError("pose_mode '" + pose_mode + "' must be topic or none");
@@ -271,28 +295,9 @@ void CameraNode::SetUpLive(const std::string& backend) {
   stamp_offset_ns_ = static_cast<int64_t>(stamp_offset * 1e9);
   try {
     if (backend == "aravis") {
-      AravisOptions o;
-      o.device = Declare<std::string>("device", "", "Aravis device id or IP; empty = the first");
-      o.pixel_format = Declare<std::string>(
-          "pixel_format", "", "Mono8 | Mono16 | RGB8 | BGR8 | Bayer{RG,GR,GB,BG}8; empty = keep");
-      o.width = width;
-      o.height = height;
-      o.frame_rate = Declare<double>("frame_rate", 0.0, "Hz; 0 = the device's");
-      o.exposure_us = Declare<double>("exposure_us", 0.0, "us; 0 = the device's");
-      o.depth_device =
-          Declare<std::string>("depth_device", "", "second device streaming Mono16 depth");
-      o.depth_scale = Declare<double>("depth_scale", 0.001, "metres per depth unit");
-      o.depth_tolerance = Declare<double>(
-          "depth_tolerance", 0.02, "s: max stamp difference between colour and depth");
-      o.buffers = buffers;
-      live_ = OpenAravisBackend(o);
+      live_ = OpenAravisBackend(aravis);
     } else {
-      LibcameraOptions o;
-      o.camera = Declare<std::string>("camera", "", "libcamera camera id; empty = the first");
-      o.width = width;
-      o.height = height;
-      o.buffers = buffers;
-      live_ = OpenLibcameraBackend(o);
+      live_ = OpenLibcameraBackend(libcamera);
     }
   } catch (const runtime::StartupError&) {
     throw;

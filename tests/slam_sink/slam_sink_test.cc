@@ -161,12 +161,12 @@ namespace p2i::slam_sink {
 TEST_CASE("SlamSink's camera_info.yaml matches the views it writes", "[unit]") {
   TempDir dir("camera_size");
   SlamSinkOptions options;
-  options.writer.out_dir = dir.str();
+  options.writer.out_dir = dir.path();
   options.check = false;
   SlamSink sink(options, SmallCamera(640, 480));  // a 640x480 calibration, 160x120 views
   const scene::Pose a = BasePose();
   CHECK(sink.Process(RenderedFrame(a, 1.0, 0)).written);
-  const auto written = scene::CameraInfo::FromYamlFile(dir.str() + "/camera_info.yaml");
+  const auto written = scene::CameraInfo::FromYamlFile(dir.path() + "/camera_info.yaml");
   CHECK(written.image_width == 160);
   CHECK(written.image_height == 120);
   CHECK(written.fx() == Approx(SmallCamera(640, 480).fx() / 4));
@@ -177,7 +177,7 @@ TEST_CASE("SlamSink's camera_info.yaml matches the views it writes", "[unit]") {
   CHECK_THROWS_WITH(sink.Process(other), Catch::Contains("80x60") && Catch::Contains("160x120"));
   sink.Close();
   // The sequence reads back with p2i's own reader.
-  CHECK(scene::ReadTumRgbd(dir.str()).size() == 1);
+  CHECK(scene::ReadTumRgbd(dir.path()).size() == 1);
 }
 
 }  // namespace p2i::slam_sink
