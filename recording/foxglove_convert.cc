@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstring>
 
+#include "convert/depth.h"
 #include "msgs/codec.h"
 #include "msgs/foxglove.pb.h"
 
@@ -67,25 +68,15 @@ void AddDepth(const std::string& topic, int64_t stamp, const std::string& frame,
   r.set_height(img.height);
   r.set_encoding("16UC1");
   r.set_step(img.width * 2);
+  // Metres by the project's one depth decoder (value x depth_scale, invalid / non-finite -> 0).
+  const cv::Mat metres = convert::DepthToMetres(img);
   std::string px(static_cast<size_t>(img.width) * img.height * 2, '\0');
   auto* dst = reinterpret_cast<uint16_t*>(px.data());
-  const double mm = img.depth_scale * 1000.0;
   for (uint32_t y = 0; y < img.height; ++y) {
-    const uint8_t* row = img.data->data() + static_cast<size_t>(y) * img.step;
+    const float* row = metres.ptr<float>(static_cast<int>(y));
     for (uint32_t x = 0; x < img.width; ++x) {
-      double raw;
-      if (img.encoding == pb::DEPTH16U) {
-        uint16_t v;
-        std::memcpy(&v, row + 2 * x, 2);
-        raw = v;
-      } else {
-        float v;
-        std::memcpy(&v, row + 4 * x, 4);
-        raw = v;
-      }
-      const double m = raw == img.invalid_value || !std::isfinite(raw) ? 0.0 : raw * mm;
       dst[static_cast<size_t>(y) * img.width + x] =
-          static_cast<uint16_t>(std::clamp(std::lround(m), 0l, 65535l));
+          static_cast<uint16_t>(std::clamp(std::lround(row[x] * 1000.0), 0l, 65535l));
     }
   }
   r.set_data(std::move(px));
