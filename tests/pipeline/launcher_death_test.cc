@@ -165,8 +165,11 @@ TEST_CASE("kill -9 of p2i launch: nodes shut down cleanly at once, the next laun
   INFO(text);
   CHECK(WIFEXITED(status));
   CHECK(WEXITSTATUS(status) == 1);  // a node failed
-  CHECK_THAT(text, Catch::Contains("removed " + run_dir));
-  CHECK_THAT(text, Catch::Contains("removed " + params_dir));
+  // Both are gone after the next launch. Which launch removed them is not asserted: under
+  // `ctest -j2` another test's `p2i launch` may start in between and sweep them first (every
+  // launch removes every dead launcher's folders). The sweep's rules (dead pids only, this
+  // user's folders only, the removed paths returned for the "[launch] removed" report) are
+  // pinned without that race by tests/tools/launch_cleanup_test.cc on folders of its own.
   CHECK_FALSE(fs::exists(run_dir));
   CHECK_FALSE(fs::exists(params_dir));
   CHECK_THAT(text, Catch::Contains("unknown parameter 'zz' (from " + bad + ":6"));
