@@ -287,8 +287,9 @@ nlohmann::json BenchBridge(const Frames& frames, int clients, double seconds,
 int main(int argc, char** argv) {
   double seconds = 20, bridge_seconds = 8;
   std::string out = "recording_bench_out", compression = "zstd";
-  for (int i = 1; i + 1 < argc; i += 2) {
-    const std::string k = argv[i];
+  for (int i = 1; i < argc; i += 2) {
+    std::string k = argv[i];
+    if (i + 1 == argc) k = "";  // every option takes a value: a lone flag (--help) is usage
     if (k == "--seconds") seconds = std::stod(argv[i + 1]);
     else if (k == "--bridge-seconds") bridge_seconds = std::stod(argv[i + 1]);
     else if (k == "--out") out = argv[i + 1];
