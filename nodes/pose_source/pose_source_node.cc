@@ -33,29 +33,22 @@ std::vector<scene::StampedPose> LoadOne(const std::string& spec, int index,
 }  // namespace
 
 PoseSourceNode::PoseSourceNode(const runtime::NodeArgs& args) : Node("pose_source", args) {
-  const std::string spec = Declare<std::string>(
-      "trajectory", "arm_sweep", "generator name, inline {type: ...} map, .yaml or TUM file");
-  const int index = Declare<int>("trajectory_index", 0, "which trajectory of a multi spec");
-  const std::string planned_spec =
-      Declare<std::string>("planned_trajectory", "", "spec of planned poses; empty = none");
-  const int planned_index = Declare<int>("planned_trajectory_index", 0, "which planned one");
-  const std::string scene_spec = Declare<std::string>(
-      "scene", "builtin:small_office", "scene for the random_walk generator");
-  const double rate = Declare<double>("rate", 20.0, "measured poses per second");
-  double planned_rate = Declare<double>("planned_rate", 0.0, "planned poses per second; 0 = rate");
-  loop_ = Declare<bool>("loop", true, "restart the trajectory at its end");
-  exit_at_end_ = Declare<bool>("exit_at_end", false, "stop the node when the trajectory ends");
-  frame_id_ = Declare<std::string>("frame_id", "world", "frame of the poses");
-  if (!(rate > 0.0) || planned_rate < 0.0) {
-    throw runtime::StartupError("rate must be > 0 and planned_rate >= 0");
-  }
-  if (planned_rate == 0.0) planned_rate = rate;
+  const PoseSourceOptions o = PoseSourceOptions::FromParameters(Params());
+  o.Validate();  // std::invalid_argument: RunNode's configuration error, exit 2
+  loop_ = o.loop;
+  exit_at_end_ = o.exit_at_end;
+  frame_id_ = o.frame_id;
+  const std::string& spec = o.trajectory;
+  const std::string& planned_spec = o.planned_trajectory;
+  const double rate = o.rate;
+  const double planned_rate = o.PlannedRate();
   ParametersDone();
 
   try {
-    measured_ = LoadOne(spec, index, scene_spec, "trajectory");
+    measured_ = LoadOne(spec, o.trajectory_index, o.scene, "trajectory");
     if (!planned_spec.empty()) {
-      planned_ = LoadOne(planned_spec, planned_index, scene_spec, "planned_trajectory");
+      planned_ = LoadOne(planned_spec, o.planned_trajectory_index, o.scene,
+                         "planned_trajectory");
     }
   } catch (const runtime::StartupError&) {
     throw;

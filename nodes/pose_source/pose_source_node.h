@@ -7,22 +7,15 @@
 #include <string>
 #include <vector>
 
+#include "nodes/pose_source/pose_source_options.h"
 #include "nodes/runtime/node.h"
 #include "scene/pose.h"
 
 namespace p2i::nodes {
 
-/// Parameters (see README.md beside this file):
-///   trajectory (string, "arm_sweep"): generator name, inline map "{type: orbit, ...}",
-///     generator .yaml file or TUM file (scene::ResolveTrajectorySpec);
-///   trajectory_index (int, 0): which one when the spec yields several (adjacent_sweeps);
-///   planned_trajectory (string, ""): the same kinds of spec for planned poses; "" = none;
-///   planned_trajectory_index (int, 0);
-///   scene (string, "builtin:small_office"): only for the random_walk generator;
-///   rate (Hz, 20), planned_rate (Hz, 0 = rate);
-///   loop (bool, true): start again at the end; exit_at_end (bool, false): stop the node when a
-///     non-looping trajectory ends;
-///   frame_id (string, "world").
+/// Parameters: PoseSourceOptions (pose_source_options.h; README.md beside this file lists
+/// them): trajectory, trajectory_index, planned_trajectory, planned_trajectory_index, scene,
+/// rate, planned_rate, loop, exit_at_end, frame_id.
 /// Topics: "pose" (PoseStamped; capture stamp = publish time), "planned_pose" (PoseRequest with
 /// increasing request_id). Counters: poses_published, planned_published, laps.
 /// Thread-safety: everything runs on the node's executor thread.
