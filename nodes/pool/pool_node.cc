@@ -2,40 +2,31 @@
 /// @brief p2i_pool: parameters, sockets on the executor, registry entry, status counters.
 #include "nodes/pool/pool_node.h"
 
+#include "nodes/pool/pool_options.h"
 #include "nodes/runtime/endpoints.h"
 #include "nodes/runtime/peer_registry.h"
 
 namespace p2i::nodes {
 
 PoolNode::PoolNode(const runtime::NodeArgs& args) : Node("pool", args) {
-  const std::string service = Declare<std::string>("service", "render", "service name to serve");
-  const std::string type =
-      Declare<std::string>("type", "RenderRequest", "request type name (for p2i topic list -v)");
-  std::string backend = Declare<std::string>(
-      "backend", "", "endpoint the workers connect to; '' = ipc://$P2I_RUN_DIR/pool.<service>.ipc");
-  const double worker_timeout = Declare<double>(
-      "worker_timeout", 3.0, "s a worker may take for one request before it is presumed dead");
-  const double idle_expiry =
-      Declare<double>("idle_expiry", 3.5, "s an idle worker may go without a heartbeat");
-  const int max_queue = Declare<int>("max_queue", 10000, "requests waiting for a worker, at most");
-  if (worker_timeout <= 0) throw runtime::StartupError("parameter 'worker_timeout' must be > 0");
-  if (idle_expiry <= 0) throw runtime::StartupError("parameter 'idle_expiry' must be > 0");
-  if (max_queue <= 0) throw runtime::StartupError("parameter 'max_queue' must be > 0");
-
+  const PoolOptions options = PoolOptions::FromParameters(Params());
+  options.Validate();  // std::invalid_argument: RunNode's configuration error, exit 2
+  const std::string& service = options.service;
   ParametersDone();  // --help and unknown parameters stop here, before anything is bound
   const std::string resolved = Resolve(service);
   PoolBrokerOptions o;
   const std::string given_endpoint = EndpointFor(service, resolved);  // `endpoints` entry
   o.frontend = given_endpoint.empty() ? runtime::DefaultEndpoint("service", resolved) : given_endpoint;
-  o.backend = backend.empty() ? runtime::DefaultEndpoint("pool", resolved) : backend;
-  o.worker_timeout = std::chrono::milliseconds(static_cast<int64_t>(worker_timeout * 1000));
-  o.idle_expiry = std::chrono::milliseconds(static_cast<int64_t>(idle_expiry * 1000));
-  o.max_queue = static_cast<size_t>(max_queue);
+  o.backend =
+      options.backend.empty() ? runtime::DefaultEndpoint("pool", resolved) : options.backend;
+  o.worker_timeout = std::chrono::milliseconds(static_cast<int64_t>(options.worker_timeout * 1000));
+  o.idle_expiry = std::chrono::milliseconds(static_cast<int64_t>(options.idle_expiry * 1000));
+  o.max_queue = static_cast<size_t>(options.max_queue);
   runtime::Registry::CheckEndpointFree(o.frontend, "pool of service '" + resolved + "'");
   broker_ = std::make_unique<PoolBroker>(o, [this](const std::string& text) {
     WarnThrottled("pool", text);
   });
-  runtime::RegistryEntry entry{"service", resolved, type, broker_->FrontendEndpoint(),
+  runtime::RegistryEntry entry{"service", resolved, options.type, broker_->FrontendEndpoint(),
                                FullName(), 0, "", ""};
   if (given_endpoint.empty())  // multi-host launch: reachable from the other hosts too
     entry.remote_endpoint = runtime::BindHostEndpoint(broker_->Frontend(), "pool frontend");

@@ -10,9 +10,9 @@
 
 namespace p2i::nodes {
 
-/// Parameters: service (name served to clients, default "render"), type (registry type name),
-/// backend (endpoint the workers connect to; "" = ipc://$P2I_RUN_DIR/pool.<service>.ipc),
-/// worker_timeout (s), idle_expiry (s), max_queue. Clients call the service as usual (its
+/// Parameters: PoolOptions (pool_options.h): service (name served to clients), type (registry
+/// type name), backend (endpoint the workers connect to), worker_timeout (s), idle_expiry (s),
+/// max_queue. Clients call the service as usual (its
 /// default endpoint or the `endpoints` parameter); workers are nodes started with
 /// `pool:={render: BACKEND}` (or `{render: ''}` for the default backend).
 /// NodeStatus: requests, replies, requeued, workers_lost, refused; values workers, queued.
