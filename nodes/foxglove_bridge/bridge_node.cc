@@ -16,33 +16,11 @@
 
 namespace p2i::foxglove_bridge {
 
-void BridgeOptions::Validate() const {
-  server.Validate();
-  if (!(discovery_period_s > 0))
-    throw std::invalid_argument("discovery_period: must be > 0 s");
-}
-
 BridgeNode::BridgeNode(const runtime::NodeArgs& args) : Node("foxglove_bridge", args) {
-  options_.server.address = Declare<std::string>("address", "127.0.0.1",
-                                                 "listen address (0.0.0.0 = all interfaces)");
-  options_.server.port = Declare<int>("port", 8765, "WebSocket port (0 = any free port)");
-  options_.server.max_queue_bytes = static_cast<size_t>(
-      Declare<double>("max_queue_mb", 16.0, "per-client send queue (MiB); beyond it drop") *
-      (1 << 20));
-  options_.foxglove = Declare<bool>("foxglove", true,
-                                    "also advertise Foxglove-schema channels (images, tf, poses)");
-  options_.discovery_period_s =
-      Declare<double>("discovery_period", 0.5, "s between registry scans for topics");
-  options_.topics = Declare<std::vector<std::string>>("topics", {}, "only these topics (empty = all)");
-  const std::string port_file =
-      Declare<std::string>("port_file", "", "write the bound port here (tests, port:=0)");
-  try {
-    options_.Validate();
-  } catch (const std::invalid_argument& e) {
-    throw runtime::StartupError(e.what());
-  }
+  options_ = BridgeOptions::FromParameters(Params());
+  options_.Validate();  // std::invalid_argument: RunNode's configuration error, exit 2
   ParametersDone();  // --help and unknown parameters stop here, before the port is bound
-  server_ = std::make_unique<WsServer>(options_.server, [this](uint32_t channel) {
+  server_ = std::make_unique<WsServer>(options_.Server(), [this](uint32_t channel) {
     GetExecutor().Post([this, channel] { EnsureSubscribed(channel); });
   });
   try {
@@ -50,12 +28,12 @@ BridgeNode::BridgeNode(const runtime::NodeArgs& args) : Node("foxglove_bridge", 
   } catch (const std::runtime_error& e) {
     throw runtime::StartupError(e.what());
   }
-  if (!port_file.empty()) {
-    const std::string tmp = port_file + ".tmp";
+  if (!options_.port_file.empty()) {
+    const std::string tmp = options_.port_file + ".tmp";
     if (FILE* f = std::fopen(tmp.c_str(), "w")) {
       std::fprintf(f, "%d\n", server_->Port());
       std::fclose(f);
-      std::rename(tmp.c_str(), port_file.c_str());
+      std::rename(tmp.c_str(), options_.port_file.c_str());
     }
   }
   Log().info("Foxglove WebSocket ({}) on ws://{}:{}", kSubprotocol, options_.server.address,

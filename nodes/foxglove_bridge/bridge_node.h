@@ -11,21 +11,14 @@
 #include <string>
 #include <vector>
 
+#include "nodes/foxglove_bridge/bridge_options.h"
 #include "nodes/foxglove_bridge/ws_server.h"
 #include "nodes/runtime/endpoints.h"
 #include "nodes/runtime/node.h"
 
 namespace p2i::foxglove_bridge {
 
-struct BridgeOptions {
-  WsServerOptions server;
-  bool foxglove = true;             ///< also advertise the Foxglove-schema channels
-  double discovery_period_s = 0.5;  ///< registry re-read period (new / gone topics)
-  std::vector<std::string> topics;  ///< only these topics (empty = all)
-  void Validate() const;            ///< throws std::invalid_argument naming the parameter
-};
-
-/// Threads: the node's executor (discovery timer, subscriptions, conversion) and the
+/// Parameters: BridgeOptions (bridge_options.h). Threads: the node's executor (discovery timer, subscriptions, conversion) and the
 /// WsServer's I/O thread; they meet only through WsServer's thread-safe calls and Post().
 class BridgeNode : public runtime::Node {
  public:
