@@ -32,31 +32,18 @@ double Percentile(const std::vector<double>& v, double p) {
 }  // namespace
 
 MonitorNode::MonitorNode(const runtime::NodeArgs& args) : Node("monitor", args) {
-  duration_s_ = Declare<double>("duration", 120.0, "seconds until the summary; 0 = until stopped");
-  const std::string scene_spec =
-      Declare<std::string>("scene", "builtin:small_office", "ground truth: builtin:NAME or YAML");
-  const int width = Declare<int>("camera_width", 640, "sim camera width (as the camera node)");
-  const int height = Declare<int>("camera_height", 480, "sim camera height (as the camera node)");
-  const std::string lpips_path = Declare<std::string>(
-      "lpips_weights", "", "LPIPS-Squeeze weights; '' = $P2I_LPIPS_WEIGHTS; missing = not scored");
-  score_every_ = Declare<int>("score_every", 1, "score every N-th view (ground truth costs CPU)");
-  summary_file_ = Declare<std::string>("summary_file", "", "write the summary JSON here");
-  sink_summary_file_ =
-      Declare<std::string>("sink_summary", "", "slam_sink summary.json to report from");
-  sequence_dir_ = Declare<std::string>("sequence_dir", "", "where slam_sink writes (reported)");
-  if (duration_s_ < 0 || width <= 0 || height <= 0 || score_every_ < 1) {
-    throw runtime::StartupError("duration >= 0, camera_width/height > 0, score_every >= 1");
-  }
+  options_ = MonitorOptions::FromParameters(Params());
+  options_.Validate();  // std::invalid_argument: RunNode's configuration error, exit 2
   ParametersDone();
   try {
-    sim_.emplace(scene::SimScene::FromSpec(scene_spec));
+    sim_.emplace(scene::SimScene::FromSpec(options_.scene));
   } catch (const std::exception& e) {
     throw runtime::StartupError(e.what());
   }
   // The camera node's default sim camera.
-  sim_camera_ = scene::SimScene::DefaultCamera(width, height);
+  sim_camera_ = scene::SimScene::DefaultCamera(options_.camera_width, options_.camera_height);
   baselines_.emplace(&*sim_, sim_camera_);
-  lpips_ = model::LpipsSqueeze::TryLoad(lpips_path, &lpips_status_);
+  lpips_ = model::LpipsSqueeze::TryLoad(options_.lpips_weights, &lpips_status_);
   if (lpips_) {
     lpips_status_ = "LPIPS-Squeeze from " + lpips_->weights_path();
   }
@@ -71,11 +58,11 @@ MonitorNode::MonitorNode(const runtime::NodeArgs& args) : Node("monitor", args) 
       "model_version",
       [this](const msgs::pb::ModelVersion& mv) { versions_published_.insert(mv.version()); });
   start_ = std::chrono::steady_clock::now();
-  if (duration_s_ > 0) {
+  if (options_.duration > 0) {
     AddTimer(std::chrono::milliseconds(200), [this] {
       const double elapsed =
           std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
-      if (elapsed >= duration_s_) Finish();
+      if (elapsed >= options_.duration) Finish();
     });
   }
 }
@@ -87,7 +74,7 @@ void MonitorNode::OnView(const msgs::View& view) {
   latency_ms_.push_back(view.meta.queue_ms() + view.meta.render_ms());
   coverage_.push_back(view.meta.coverage());
   SetValue("views", static_cast<double>(views_received_));
-  if ((views_received_ - 1) % score_every_ != 0) return;
+  if ((views_received_ - 1) % options_.score_every != 0) return;
 
   const cv::Mat rgb = convert::ToMat(view.rgb);
   const cv::Mat depth = convert::DepthToMetres(view.depth);
@@ -143,16 +130,18 @@ std::string MonitorNode::SummaryText() const {
   }
   std::snprintf(line, sizeof(line), "depth AbsRel (median):     %.3f\n", Median(depth_absrel_));
   os << line;
-  if (!sink_summary_file_.empty() && std::filesystem::exists(sink_summary_file_)) {
+  if (!options_.sink_summary.empty() && std::filesystem::exists(options_.sink_summary)) {
     try {
-      std::ifstream in(sink_summary_file_);
+      std::ifstream in(options_.sink_summary);
       const nlohmann::json s = nlohmann::json::parse(in);
       os << "slam_sink summary:         " << s.dump() << "\n";
     } catch (const std::exception& e) {
       os << "slam_sink summary:         unreadable (" << e.what() << ")\n";
     }
   }
-  if (!sequence_dir_.empty()) os << "TUM sequence written to:   " << sequence_dir_ << "\n";
+  if (!options_.sequence_dir.empty()) {
+    os << "TUM sequence written to:   " << options_.sequence_dir << "\n";
+  }
   return os.str();
 }
 
@@ -162,7 +151,7 @@ void MonitorNode::Finish() {
   const std::string text = SummaryText();
   std::fputs(text.c_str(), stdout);
   std::fflush(stdout);
-  if (!summary_file_.empty()) {
+  if (!options_.summary_file.empty()) {
     nlohmann::json j;
     j["frames_captured"] = frames_captured_;
     j["model_versions_published"] = versions_published_.size();
@@ -180,13 +169,13 @@ void MonitorNode::Finish() {
     j["depth_warp_ssim_median"] = NumberOrNull(Median(warp_ssim_));
     j["lpips_squeeze_median"] = lpips_ ? NumberOrNull(Median(lpips_values_)) : nullptr;
     j["depth_absrel_median"] = NumberOrNull(Median(depth_absrel_));
-    j["sequence_dir"] = sequence_dir_;
-    const std::string tmp = summary_file_ + ".tmp";
+    j["sequence_dir"] = options_.sequence_dir;
+    const std::string tmp = options_.summary_file + ".tmp";
     {
       std::ofstream out(tmp);
       out << j.dump(2) << "\n";
     }
-    std::filesystem::rename(tmp, summary_file_);
+    std::filesystem::rename(tmp, options_.summary_file);
   }
   Stop();
 }

@@ -12,6 +12,7 @@
 
 #include "model/lpips.h"
 #include "nodes/monitor/keyframe_baselines.h"
+#include "nodes/monitor/monitor_options.h"
 #include "nodes/runtime/node.h"
 #include "scene/camera_info.h"
 #include "scene/sim_scene.h"
@@ -28,6 +29,7 @@ namespace p2i::nodes {
 /// Beside the served views it scores the two free baselines on the same poses (PSNR, SSIM), so
 /// the summary shows what P2I-NET has to beat: the nearest keyframe and the depth warp of the
 /// frames captured so far (KeyframeBaselines).
+/// Parameters: MonitorOptions (monitor_options.h).
 /// Thread-compatible: everything runs on the node's executor thread.
 class MonitorNode : public runtime::Node {
  public:
@@ -45,11 +47,7 @@ class MonitorNode : public runtime::Node {
   scene::CameraInfo sim_camera_;
   std::unique_ptr<model::LpipsSqueeze> lpips_;
   std::string lpips_status_;
-  std::string summary_file_;
-  std::string sink_summary_file_;
-  std::string sequence_dir_;
-  double duration_s_ = 0.0;
-  int score_every_ = 1;
+  MonitorOptions options_;
   std::chrono::steady_clock::time_point start_;
   bool finished_ = false;
 
