@@ -10,58 +10,36 @@
 #include "model/p2i_config.h"
 #include "model/pose_dependence.h"
 #include "nodes/runtime/endpoints.h"
+#include "nodes/trainer/trainer_node_options.h"
 #include "scene/dataset_loader.h"
 
 namespace p2i::trainer {
 
 TrainerNode::TrainerNode(const runtime::NodeArgs& args) : Node("trainer", args) {
-  const std::string config_file =
-      Declare<std::string>("config", "", "P2I-NET config YAML (model/presets/); empty = defaults");
-  const int resolution =
-      Declare<int>("resolution", 0, "override the config's resolution (0 = keep)");
-  const std::string dataset =
-      Declare<std::string>("dataset", "", "offline: dataset folder to train on; empty = online");
-  std::string work_dir = Declare<std::string>(
-      "work_dir", "", "checkpoints, versions and the buffer; empty = $P2I_RUN_DIR/<node name>");
-  const std::string checkpoint =
-      Declare<std::string>("checkpoint", "", "warm-start checkpoint (copied into work_dir)");
-  const double buffer_mb = Declare<double>("buffer_mb", 256.0, "replay buffer bound (MiB)");
-  const double recent_fraction =
-      Declare<double>("recent_fraction", 0.5, "share of the buffer kept as the recent window");
-  const int min_frames = Declare<int>("min_frames", 8, "frames needed before training starts");
-  const int steps = Declare<int>("publish_every_steps", 200, "training steps per round/version");
-  const int enet_steps = Declare<int>(
-      "enet_steps_per_version", -1,
-      "ENET steps per round after the G+D steps (-1 = publish_every_steps, 0 = train G only)");
-  const int threads = Declare<int>("threads", 1, "torch threads for training");
-  const int max_val = Declare<int>("max_val_frames", 8, "held-out frames for validation PSNR");
-  const int max_rounds = Declare<int>("max_rounds", -1, "stop training after N rounds (-1 = never)");
-  const double status_period =
-      Declare<double>("trainer_status_period", 1.0, "s between TrainerStatus messages");
-  shutdown_wait_s_ = Declare<double>(
-      "shutdown_wait", 2.0, "s after which a shutdown still waiting for the training step logs it");
-  if (threads < 1) throw runtime::StartupError("parameter 'threads' must be >= 1, got " + std::to_string(threads));
+  TrainerNodeOptions options = TrainerNodeOptions::FromParameters(Params());
+  options.Validate();  // std::invalid_argument: RunNode's configuration error, exit 2
+  shutdown_wait_s_ = options.shutdown_wait;
   ParametersDone();
 
-  model::P2iConfig config =
-      config_file.empty() ? model::P2iConfig() : model::P2iConfig::FromYamlFile(config_file);
-  if (resolution > 0) {
-    config.resolution = resolution;
+  model::P2iConfig config = options.config_file.empty()
+                                ? model::P2iConfig()
+                                : model::P2iConfig::FromYamlFile(options.config_file);
+  if (options.resolution > 0) {
+    config.resolution = options.resolution;
     if (config.g_schedule == "custom") {
       // Keep the per-stage widths consistent with the new resolution (one per stage).
-      const int stages = static_cast<int>(std::log2(resolution)) - 1;
+      const int stages = static_cast<int>(std::log2(options.resolution)) - 1;
       std::vector<int> w = config.g_widths;
       w.resize(stages, w.empty() ? 32 : w.back());
       config.g_widths = w;
     }
   }
   config.Validate();
-  if (work_dir.empty()) work_dir = runtime::RunDir() + "/" + Name();
+  const std::string work_dir =
+      options.work_dir.empty() ? runtime::RunDir() + "/" + Name() : options.work_dir;
 
-  ReplayBuffer::Options b;
+  ReplayBuffer::Options& b = options.buffer;
   b.dir = work_dir + "/buffer";
-  b.max_mb = buffer_mb;
-  b.recent_fraction = recent_fraction;
   b.width = b.height = config.resolution;
   b.seed = config.seed;
   buffer_ = std::make_unique<ReplayBuffer>(b);
@@ -73,6 +51,7 @@ TrainerNode::TrainerNode(const runtime::NodeArgs& args) : Node("trainer", args) 
   version_pub_ = Advertise<msgs::pb::ModelVersion>("model_version", latched);
   status_pub_ = Advertise<msgs::pb::TrainerStatus>("trainer_status");
 
+  const std::string& dataset = options.dataset;
   if (!dataset.empty()) {
     const scene::DatasetIndex index = scene::OpenDataset(dataset);
     for (size_t i = 0; i < index.size(); ++i) buffer_->Add(index.Load(i), index.camera());
@@ -84,16 +63,9 @@ TrainerNode::TrainerNode(const runtime::NodeArgs& args) : Node("trainer", args) 
     });
   }
 
-  TrainingLoop::Options o;
+  TrainingLoop::Options o = options.Loop();
   o.config = config;
   o.work_dir = work_dir;
-  o.steps_per_round = steps;
-  o.enet_steps_per_round = enet_steps;
-  o.threads = threads;
-  o.warm_start = checkpoint;
-  o.min_frames = static_cast<size_t>(std::max(2, min_frames));
-  o.max_val_frames = max_val;
-  o.max_rounds = max_rounds;
   loop_ = std::make_unique<TrainingLoop>(
       o, buffer_.get(),
       [this](const msgs::pb::ModelVersion& v) {
@@ -112,8 +84,8 @@ TrainerNode::TrainerNode(const runtime::NodeArgs& args) : Node("trainer", args) 
       [this](const msgs::pb::TrainerStatus& s) {
         if (!closing_) status_pub_->Publish(s);
       });
-  if (status_period > 0)
-    AddTimer(std::chrono::nanoseconds(static_cast<int64_t>(status_period * 1e9)),
+  if (options.trainer_status_period > 0)
+    AddTimer(std::chrono::nanoseconds(static_cast<int64_t>(options.trainer_status_period * 1e9)),
              [this] { status_pub_->Publish(loop_->LastStatus()); });
   loop_->Start();
 }

@@ -12,7 +12,8 @@
 
 namespace p2i::trainer {
 
-/// Parameters and topics: docs/TRAINER.md. Training runs on the TrainingLoop's thread; frames
+/// Parameters: TrainerNodeOptions (trainer_node_options.h); parameters and topics:
+/// docs/TRAINER.md. Training runs on the TrainingLoop's thread; frames
 /// are converted and added to the buffer on the executor thread; ModelVersion ("model_version",
 /// latched) and TrainerStatus ("trainer_status") are published from the training thread through
 /// the runtime's locking publishers, and TrainerStatus also every `trainer_status_period` s from

@@ -1,0 +1,86 @@
+/// @file trainer_node_options.cc
+/// @brief The trainer node's parameters -> TrainerNodeOptions, and their validation.
+#include "nodes/trainer/trainer_node_options.h"
+
+#include "nodes/runtime/option_error.h"
+
+namespace p2i::trainer {
+namespace {
+
+void DeclareLoop(runtime::Parameters& p, TrainingLoop::Options* o) {
+  o->warm_start = p.Declare<std::string>("checkpoint", o->warm_start,
+                                         "warm-start checkpoint (copied into work_dir)");
+  o->steps_per_round = p.Declare<int>("publish_every_steps", o->steps_per_round,
+                                      "training steps per round/version");
+  o->enet_steps_per_round = p.Declare<int>(
+      "enet_steps_per_version", o->enet_steps_per_round,
+      "ENET steps per round after the G+D steps (-1 = publish_every_steps, 0 = train G only)");
+  o->threads = p.Declare<int>("threads", o->threads, "torch threads for training");
+  o->max_val_frames = p.Declare<int>("max_val_frames", o->max_val_frames,
+                                     "held-out frames for validation PSNR");
+  o->max_rounds =
+      p.Declare<int>("max_rounds", o->max_rounds, "stop training after N rounds (-1 = never)");
+}
+
+}  // namespace
+
+TrainerNodeOptions TrainerNodeOptions::FromParameters(runtime::Parameters& p) {
+  TrainerNodeOptions o;  // the defaults, written once in the field initialisers
+  o.config_file = p.Declare<std::string>("config", o.config_file,
+                                         "P2I-NET config YAML (model/presets/); empty = defaults");
+  o.resolution = p.Declare<int>("resolution", o.resolution,
+                                "override the config's resolution (0 = keep)");
+  o.dataset = p.Declare<std::string>("dataset", o.dataset,
+                                     "offline: dataset folder to train on; empty = online");
+  o.work_dir = p.Declare<std::string>(
+      "work_dir", o.work_dir,
+      "checkpoints, versions and the buffer; empty = $P2I_RUN_DIR/<node name>");
+  o.buffer.max_mb =
+      p.Declare<double>("buffer_mb", o.buffer.max_mb, "replay buffer bound (MiB)");
+  o.buffer.recent_fraction = p.Declare<double>("recent_fraction", o.buffer.recent_fraction,
+                                               "share of the buffer kept as the recent window");
+  o.min_frames =
+      p.Declare<int>("min_frames", o.min_frames, "frames needed before training starts");
+  DeclareLoop(p, &o.loop);
+  o.trainer_status_period = p.Declare<double>("trainer_status_period", o.trainer_status_period,
+                                              "s between TrainerStatus messages");
+  o.shutdown_wait = p.Declare<double>(
+      "shutdown_wait", o.shutdown_wait,
+      "s after which a shutdown still waiting for the training step logs it");
+  return o;
+}
+
+void TrainerNodeOptions::Validate() const {
+  using runtime::CheckOption;
+  const char* n = "trainer";
+  CheckOption(resolution >= 0, n, "resolution", resolution, "be >= 0",
+              "resolution:=0 keeps the config's");
+  CheckOption(buffer.max_mb > 0.0, n, "buffer_mb", buffer.max_mb, "be > 0", "e.g. buffer_mb:=256");
+  CheckOption(buffer.recent_fraction > 0.0 && buffer.recent_fraction <= 1.0, n,
+              "recent_fraction", buffer.recent_fraction, "be in (0, 1]",
+              "e.g. recent_fraction:=0.5");
+  CheckOption(min_frames >= 2, n, "min_frames", min_frames, "be >= 2",
+              "training needs a frame to train on and one to validate, e.g. min_frames:=8");
+  CheckOption(loop.steps_per_round >= 1, n, "publish_every_steps", loop.steps_per_round,
+              "be >= 1", "e.g. publish_every_steps:=200");
+  CheckOption(loop.enet_steps_per_round >= -1, n, "enet_steps_per_version",
+              loop.enet_steps_per_round, "be >= -1",
+              "-1 = publish_every_steps, 0 = train G only");
+  CheckOption(loop.threads >= 1, n, "threads", loop.threads, "be >= 1", "e.g. threads:=1");
+  CheckOption(loop.max_val_frames >= 1, n, "max_val_frames", loop.max_val_frames, "be >= 1",
+              "e.g. max_val_frames:=8");
+  CheckOption(loop.max_rounds >= -1, n, "max_rounds", loop.max_rounds, "be >= -1",
+              "max_rounds:=-1 trains until stopped");
+  CheckOption(trainer_status_period >= 0.0, n, "trainer_status_period", trainer_status_period,
+              "be >= 0", "seconds; 0 = no periodic TrainerStatus");
+  CheckOption(shutdown_wait >= 0.0, n, "shutdown_wait", shutdown_wait, "be >= 0",
+              "seconds, e.g. shutdown_wait:=2");
+}
+
+TrainingLoop::Options TrainerNodeOptions::Loop() const {
+  TrainingLoop::Options o = loop;
+  o.min_frames = static_cast<size_t>(min_frames);
+  return o;
+}
+
+}  // namespace p2i::trainer

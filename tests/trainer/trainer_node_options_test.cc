@@ -1,0 +1,56 @@
+/// @file trainer_node_options_test.cc
+/// @brief TrainerNodeOptions: the declared defaults are the buffer's, loop's and node's field
+/// initialisers, parameters override them, every Validate() rule refuses a bad value naming
+/// the parameter and showing the value. Torch-free.
+#include "nodes/trainer/trainer_node_options.h"
+
+#include <catch2/catch.hpp>
+
+#include "tests/option_test_util.h"
+
+namespace p2i::trainer {
+namespace {
+
+using namespace p2i::testing;
+
+TEST_CASE("TrainerNodeOptions: declared defaults are the field initialisers", "[unit]") {
+  const runtime::Parameters p = CheckDefaults<TrainerNodeOptions>(15);
+  const TrainingLoop::Options loop;
+  CHECK(p.Declared().at("buffer_mb").default_text == "256");  // ReplayBuffer::Options'
+  CHECK(p.Declared().at("publish_every_steps").default_text ==
+        std::to_string(loop.steps_per_round));
+  CHECK(p.Declared().at("min_frames").default_text == std::to_string(loop.min_frames));
+  CHECK(p.Declared().at("enet_steps_per_version").default_text == "-1");
+  CHECK(TrainerNodeOptions().Loop().min_frames == loop.min_frames);
+
+  const TrainerNodeOptions s = OptionsFrom<TrainerNodeOptions>(
+      {{"publish_every_steps", "4"}, {"min_frames", "4"}, {"checkpoint", "a.pt"}});
+  CHECK(s.loop.steps_per_round == 4);
+  CHECK(s.Loop().min_frames == 4);
+  CHECK(s.loop.warm_start == "a.pt");
+  CHECK_NOTHROW(s.Validate());
+}
+
+TEST_CASE("TrainerNodeOptions::Validate refuses each bad value, naming parameter and value",
+          "[unit]") {
+  CheckRefusals<TrainerNodeOptions>(
+      "trainer",
+      {
+          {{{"resolution", "-64"}}, "resolution must be >= 0 (got -64)"},
+          {{{"buffer_mb", "0"}}, "buffer_mb must be > 0 (got 0)"},
+          {{{"recent_fraction", "1.5"}}, "recent_fraction must be in (0, 1] (got 1.5)"},
+          {{{"recent_fraction", "0"}}, "recent_fraction must be in (0, 1] (got 0)"},
+          {{{"min_frames", "1"}}, "min_frames must be >= 2 (got 1)"},
+          {{{"min_frames", "-3"}}, "min_frames must be >= 2 (got -3)"},
+          {{{"publish_every_steps", "0"}}, "publish_every_steps must be >= 1 (got 0)"},
+          {{{"enet_steps_per_version", "-2"}}, "enet_steps_per_version must be >= -1 (got -2)"},
+          {{{"threads", "0"}}, "threads must be >= 1 (got 0)"},
+          {{{"max_val_frames", "0"}}, "max_val_frames must be >= 1 (got 0)"},
+          {{{"max_rounds", "-5"}}, "max_rounds must be >= -1 (got -5)"},
+          {{{"trainer_status_period", "-1"}}, "trainer_status_period must be >= 0 (got -1)"},
+          {{{"shutdown_wait", "-0.5"}}, "shutdown_wait must be >= 0 (got -0.5)"},
+      });
+}
+
+}  // namespace
+}  // namespace p2i::trainer
