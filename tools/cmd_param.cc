@@ -1,8 +1,10 @@
 /// @file cmd_param.cc
 /// @brief `p2i param list [NODE] | get NODE NAME | set NODE NAME VALUE`, like `ros2 param`, on
-/// running nodes through their parameter files in $P2I_RUN_DIR/params (nodes/runtime/
-/// param_service.h). `set` works for parameters the node declares dynamic (every node's
-/// log_level; see `p2i param list NODE`).
+/// running nodes through their parameter files (nodes/runtime/param_service.h) in the params/
+/// folder of each run dir discovery reads (runtime::DiscoveryRunDirs(): $P2I_RUN_DIR, else
+/// every running launch of this user). This host only: parameter files are not served to other
+/// hosts. `set` works for parameters the node declares dynamic (every node's log_level; see
+/// `p2i param list NODE`).
 #include <signal.h>
 #include <unistd.h>
 
@@ -18,6 +20,7 @@
 #include <CLI/CLI.hpp>
 #include <yaml-cpp/yaml.h>
 
+#include "nodes/runtime/graph_discovery.h"
 #include "nodes/runtime/param_service.h"
 #include "tools/cli_exit.h"
 #include "tools/command.h"
@@ -34,10 +37,17 @@ struct NodeParams {
   YAML::Node params;
 };
 
-std::vector<NodeParams> Running() {
-  std::vector<NodeParams> out;
+std::string Places() {
+  std::string out;
+  for (const auto& dir : runtime::DiscoveryRunDirs())
+    out += (out.empty() ? "" : ", ") + runtime::ParamsDir(dir);
+  return out;
+}
+
+// The nodes with parameter files in one params/ folder.
+void RunningIn(const std::string& params_dir, std::vector<NodeParams>* out) {
   std::error_code ec;
-  for (fs::directory_iterator it(runtime::ParamsDir(), ec), end; !ec && it != end; it.increment(ec)) {
+  for (fs::directory_iterator it(params_dir, ec), end; !ec && it != end; it.increment(ec)) {
     if (it->path().extension() != ".yaml") continue;
     try {
       const YAML::Node y = YAML::LoadFile(it->path().string());
@@ -47,29 +57,49 @@ std::vector<NodeParams> Running() {
       if (::kill(n.pid, 0) != 0 && errno == ESRCH) continue;  // a node killed with SIGKILL
       n.stem = (it->path().parent_path() / it->path().stem()).string();
       n.params = y["parameters"];
-      out.push_back(n);
+      out->push_back(n);
     } catch (const std::exception&) {
       // being rewritten or foreign: skip
     }
   }
+}
+
+std::vector<NodeParams> Running() {
+  std::vector<NodeParams> out;
+  for (const auto& dir : runtime::DiscoveryRunDirs()) RunningIn(runtime::ParamsDir(dir), &out);
   return out;
 }
 
 std::string Absolute(const std::string& n) { return n.empty() || n[0] == '/' ? n : "/" + n; }
 
+// The one running node called `node`; two of that name (two launches) are refused with where
+// each lives, as changing one at random would be.
 NodeParams Find(const std::string& node) {
   std::string names;
+  std::vector<NodeParams> found;
   for (auto& n : Running()) {
-    if (n.node == Absolute(node)) return n;
+    if (n.node == Absolute(node)) found.push_back(n);
     names += " " + n.node;
   }
-  throw std::invalid_argument("no running node '" + Absolute(node) + "' in " + runtime::ParamsDir() +
+  if (found.size() == 1) return found.front();
+  if (found.size() > 1) {
+    std::string where;
+    for (const auto& n : found)
+      where += " " + fs::path(n.stem).parent_path().parent_path().string() + " (pid " +
+               std::to_string(n.pid) + ")";
+    throw std::invalid_argument(std::to_string(found.size()) + " running nodes are called " +
+                                Absolute(node) + ", in" + where +
+                                ": export P2I_RUN_DIR=<one of those run dirs> to pick one");
+  }
+  throw std::invalid_argument("no running node '" + Absolute(node) + "' in " + Places() +
                               (names.empty() ? " (is a graph running? p2i node list)"
                                              : " (running:" + names + ")"));
 }
 
 int RunParam(const std::vector<std::string>& args) {
-  CLI::App app{"Parameters of running nodes (like `ros2 param`).", "p2i param"};
+  CLI::App app{"Parameters of running nodes (like `ros2 param`): the nodes of $P2I_RUN_DIR, else "
+               "of every running launch of this user (this host only).",
+               "p2i param"};
   app.require_subcommand(1);
   std::string node, name, value;
   bool describe = false;
@@ -92,7 +122,7 @@ int RunParam(const std::vector<std::string>& args) {
   if (list->parsed()) {
     std::vector<NodeParams> nodes = node.empty() ? Running() : std::vector<NodeParams>{Find(node)};
     if (nodes.empty())
-      std::fprintf(stderr, "p2i param list: no running nodes in %s\n", runtime::ParamsDir().c_str());
+      std::fprintf(stderr, "p2i param list: no running nodes in %s\n", Places().c_str());
     for (const auto& n : nodes) {
       std::printf("%s:\n", n.node.c_str());
       for (const auto& kv : n.params) {

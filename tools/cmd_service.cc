@@ -1,8 +1,10 @@
 /// @file cmd_service.cc
 /// @brief `p2i service list | call NAME TYPE VALUE`, like `ros2 service`: services of the
-/// running graph (discovery registry) and one call with a request written as YAML/JSON.
+/// running graph (found as `p2i topic` finds topics: runtime::DiscoverGraph, --peer) and one
+/// call with a request written as YAML/JSON.
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <string>
@@ -12,6 +14,8 @@
 
 #include "msgs/codec.h"
 #include "nodes/runtime/endpoints.h"
+#include "nodes/runtime/graph_discovery.h"
+#include "nodes/runtime/peer_registry.h"
 #include "nodes/runtime/raw_service.h"
 #include "nodes/runtime/shutdown.h"
 #include "tools/cli_exit.h"
@@ -26,7 +30,9 @@ std::string Absolute(const std::string& name) {
 }
 
 int RunService(const std::vector<std::string>& args) {
-  CLI::App app{"Services of the running graph (like `ros2 service`), from $P2I_RUN_DIR/registry.",
+  CLI::App app{"Services of the running graph (like `ros2 service`), found as `p2i topic list` "
+               "finds topics: $P2I_RUN_DIR/registry, else every running launch of this user, and "
+               "the registries of other hosts (--peer, $P2I_PEERS; docs/MULTIHOST.md).",
                "p2i service"};
   app.require_subcommand(1);
   bool types = false;
@@ -42,6 +48,12 @@ int RunService(const std::vector<std::string>& args) {
   call->add_option("--endpoint", endpoint, "Call here instead of the discovered endpoint");
   call->add_option("--timeout", timeout_s, "Seconds to wait for the reply")
       ->check(CLI::PositiveNumber);
+  std::vector<std::string> peers = runtime::PeerRegistries();
+  for (auto* sub : {list, call}) {
+    sub->add_option("--peer", peers,
+                    "Registry of another host's launch, tcp://ADDRESS:PORT (repeatable; "
+                    "default $P2I_PEERS)");
+  }
   std::vector<std::string> rest(args.rbegin(), args.rend() - 1);
   try {
     app.parse(rest);
@@ -49,27 +61,50 @@ int RunService(const std::vector<std::string>& args) {
     return CliExit(app, e);
   }
   runtime::Shutdown::InstallSignalHandlers();
+  const char* what = list->parsed() ? "p2i service list" : "p2i service call";
+  std::vector<runtime::RegistryEntry> services;
+  if (list->parsed() || endpoint.empty()) {
+    std::vector<std::string> errors;
+    for (auto& e : runtime::DiscoverGraph(peers, std::chrono::milliseconds(1000), &errors))
+      if (e.kind == "service") services.push_back(std::move(e));
+    for (const auto& e : errors) std::fprintf(stderr, "%s: warning: %s\n", what, e.c_str());
+  }
   if (list->parsed()) {
-    int n = 0;
-    for (const auto& e : runtime::Registry::List()) {
-      if (e.kind != "service") continue;
-      ++n;
-      std::printf("%s%s\n", e.name.c_str(), types ? (" [" + e.type + "]").c_str() : "");
+    std::vector<std::string> printed;
+    for (const auto& e : services) {
+      const std::string line = types ? e.name + " [" + e.type + "]" : e.name;
+      if (std::find(printed.begin(), printed.end(), line) != printed.end()) continue;
+      printed.push_back(line);
+      std::printf("%s\n", line.c_str());
     }
-    if (n == 0)
+    if (services.empty()) {
       std::fprintf(stderr, "p2i service list: no services in %s (is a graph running?)\n",
-                   runtime::RunDir().c_str());
+                   runtime::DiscoveryPlaces(peers).c_str());
+    }
     return 0;
   }
   name = Absolute(name);
   const msgs::pb::MsgType t = MsgTypeFromName(type);
   if (endpoint.empty()) {
-    for (const auto& e : runtime::Registry::List()) {
-      if (e.kind == "service" && e.name == name) {
-        if (e.type != type)
-          throw std::invalid_argument("service " + name + " takes " + e.type + ", not " + type);
-        endpoint = e.endpoint;
-      }
+    for (const auto& e : services) {
+      if (e.name != name) continue;
+      if (e.type != type)
+        throw std::invalid_argument("service " + name + " takes " + e.type + ", not " + type);
+    }
+    // Local servers first, then the peers' tcp endpoints (remote ipc paths are unreachable).
+    const auto endpoints = runtime::ReachableEndpoints(services, "service", name);
+    if (endpoints.size() > 1) {
+      std::fprintf(stderr, "%s: warning: %zu servers of %s; calling the first (--endpoint picks "
+                           "one):", what, endpoints.size(), name.c_str());
+      for (const auto& ep : endpoints) std::fprintf(stderr, " %s", ep.c_str());
+      std::fprintf(stderr, "\n");
+    }
+    if (!endpoints.empty()) {
+      endpoint = endpoints.front();
+    } else {
+      std::fprintf(stderr,
+                   "%s: warning: no server of %s registered in %s; trying its default endpoint\n",
+                   what, name.c_str(), runtime::DiscoveryPlaces(peers).c_str());
     }
   }
   runtime::ServiceClientOptions o;

@@ -13,6 +13,12 @@ std::vector<std::string> DiscoveryRunDirs() {
   return Registry::UserRunDirs();
 }
 
+std::string DiscoveryPlaces(const std::vector<std::string>& peers) {
+  std::string out;
+  for (const auto& dir : DiscoveryRunDirs()) out += (out.empty() ? "" : ", ") + dir;
+  return peers.empty() ? out : out + " or on the peers";
+}
+
 std::vector<RegistryEntry> DiscoverGraph(const std::vector<std::string>& peers,
                                          std::chrono::milliseconds timeout,
                                          std::vector<std::string>* errors) {

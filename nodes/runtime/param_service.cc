@@ -37,7 +37,9 @@ std::string Flow(const YAML::Node& n) {
 
 }  // namespace
 
-std::string ParamsDir() { return RunDir() + "/params"; }
+std::string ParamsDir() { return ParamsDir(RunDir()); }
+
+std::string ParamsDir(const std::string& run_dir) { return run_dir + "/params"; }
 
 std::string ParamsStem(int pid, const std::string& full_node_name) {
   std::string flat = full_node_name;

@@ -19,6 +19,8 @@ namespace p2i::runtime {
 
 /// The folder of the parameter files: $P2I_RUN_DIR/params.
 std::string ParamsDir();
+/// The same folder of another run dir (`p2i param` reads those of DiscoveryRunDirs()).
+std::string ParamsDir(const std::string& run_dir);
 /// The file stem of a node: "<pid>.<full name with '/' -> '.'>".
 std::string ParamsStem(int pid, const std::string& full_node_name);
 

@@ -1,7 +1,8 @@
 /// @file topic_discovery_test.cc
 /// @brief `p2i topic` finds a running launch without P2I_RUN_DIR exported, and a graph split
 /// over two launchers ("machines" a and b on loopback) works through their registry servers:
-/// b's camera renders at a's poses, and `p2i topic list/hz --peer` see the other machine.
+/// b's camera renders at a's poses, and `p2i topic list/hz --peer` and `p2i node list --peer`
+/// see the other machine.
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -72,6 +73,15 @@ TEST_CASE("A graph split over two launchers finds its topics through their regis
   CHECK(list.find("/pose ") != std::string::npos);
   CHECK(list.find("via tcp://127.0.0.1:" + pa) != std::string::npos);
   CHECK(list.find("via tcp://127.0.0.1:" + pb) != std::string::npos);
+  // p2i node list asks the same peers: the pose_source of a and the camera of b.
+  int nodes_code = -1;
+  const std::string nodes =
+      p2i::testing::RunCommand(p2i + " node list -v" + peers + " 2>&1", &nodes_code);
+  INFO(nodes);
+  CHECK(nodes_code == 0);
+  CHECK_THAT(nodes, Catch::Contains("/pose_source (pid") && Catch::Contains("/camera (pid") &&
+                        Catch::Contains("via tcp://127.0.0.1:" + pa) &&
+                        Catch::Contains("via tcp://127.0.0.1:" + pb));
   // b's camera only renders when it gets poses, which come from a over tcp.
   int code = 0;
   const std::string hz =
