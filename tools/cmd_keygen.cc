@@ -1,6 +1,8 @@
 /// @file cmd_keygen.cc
 /// @brief `p2i keygen NAME [--dir DIR]` (a CURVE key pair) and `p2i keygen --init DIR` (a key
-/// directory for $P2I_CURVE_DIR); see docs/SECURITY.md.
+/// directory for $P2I_CURVE_DIR); see docs/SECURITY.md. An existing NAME.key or NAME.pub is
+/// replaced only with --force (else exit 2, the usage rule of docs/RUNTIME.md); a key and its
+/// .pub are written in full before either replaces a file.
 #include <sys/stat.h>
 
 #include <cstdio>
@@ -30,6 +32,22 @@ bool FileHasKey(const std::string& path, const std::string& key) {
   return false;
 }
 
+// Writes NAME.key and NAME.pub of `dir` for a fresh pair: both are written in full (and
+// fsynced) before either replaces a file, and a failure leaves no .tmp behind.
+void WritePair(const std::string& dir, const std::string& name, const CurveKeyPair& k) {
+  const std::string key = dir + "/" + name + ".key", pub = dir + "/" + name + ".pub";
+  runtime::WriteKeyFileTmp(key, k, true);
+  try {
+    runtime::WriteKeyFileTmp(pub, k, false);
+    runtime::CommitKeyFile(key);
+  } catch (...) {
+    std::remove((key + ".tmp").c_str());
+    std::remove((pub + ".tmp").c_str());
+    throw;
+  }
+  runtime::CommitKeyFile(pub);
+}
+
 int Init(const std::string& dir) {
   fs::create_directories(dir);
   fs::permissions(dir, fs::perms::owner_all, fs::perm_options::replace);
@@ -38,10 +56,13 @@ int Init(const std::string& dir) {
   if (fs::exists(self)) {
     k = runtime::ReadKeyFile(self);
     std::printf("kept the existing key pair %s\n", self.c_str());
+    if (!fs::exists(dir + "/self.pub")) {  // complete the directory: the public half
+      runtime::WriteKeyFile(dir + "/self.pub", k, false);
+      std::printf("wrote %s/self.pub from it\n", dir.c_str());
+    }
   } else {
     k = runtime::GenerateCurveKeyPair();
-    runtime::WriteKeyFile(self, k, true);
-    runtime::WriteKeyFile(dir + "/self.pub", k, false);
+    WritePair(dir, "self", k);
     std::printf("wrote %s (secret, 0600) and %s/self.pub\n", self.c_str(), dir.c_str());
   }
   const std::string auth = dir + "/authorized_keys";
@@ -72,7 +93,8 @@ int RunKeygen(const std::vector<std::string>& args) {
   app.add_option("name", name, "Base name of the key files");
   app.add_option("--dir", dir, "Folder for NAME.key / NAME.pub (default: current folder)");
   app.add_option("--init", init, "Create or complete a key directory for P2I_CURVE_DIR");
-  app.add_flag("--force", force, "Overwrite an existing NAME.key");
+  app.add_flag("--force", force, "Replace an existing NAME.key / NAME.pub (else exit 2, nothing "
+                                 "written)");
   std::vector<std::string> rest(args.rbegin(), args.rend() - 1);
   try {
     app.parse(rest);
@@ -85,23 +107,32 @@ int RunKeygen(const std::vector<std::string>& args) {
       std::fprintf(stderr, "p2i keygen: give a NAME or --init DIR (see --help)\n");
       return 2;
     }
-    const std::string key = dir + "/" + name + ".key";
-    if (fs::exists(key) && !force) {
-      std::fprintf(stderr, "p2i keygen: %s exists; pass --force to replace it (clients that "
-                           "know its public key must then be given the new one)\n", key.c_str());
-      return 1;
+    if (name.find('/') != std::string::npos || name == "." || name == "..") {
+      std::fprintf(stderr, "p2i keygen: NAME '%s' must be a base name, not a path (put the "
+                           "folder in --dir)\n", name.c_str());
+      return 2;
+    }
+    const std::string key = dir + "/" + name + ".key", pub = dir + "/" + name + ".pub";
+    for (const std::string& path : {key, pub}) {
+      if (!force && fs::exists(fs::symlink_status(path))) {
+        // A usage matter (exit 2): the user asks for a new key where one is kept.
+        std::fprintf(stderr, "p2i keygen: %s exists; nothing was written. Pass --force to "
+                             "replace %s and %s (clients that know the old public key must "
+                             "then be given the new one)\n",
+                     path.c_str(), key.c_str(), pub.c_str());
+        return 2;
+      }
     }
     fs::create_directories(dir);
     const CurveKeyPair k = runtime::GenerateCurveKeyPair();
-    runtime::WriteKeyFile(key, k, true);
-    runtime::WriteKeyFile(dir + "/" + name + ".pub", k, false);
-    std::printf("wrote %s (secret, 0600) and %s/%s.pub\npublic key: %s\n", key.c_str(),
-                dir.c_str(), name.c_str(), k.public_z85.c_str());
+    WritePair(dir, name, k);
+    std::printf("wrote %s (secret, 0600) and %s\npublic key: %s\n", key.c_str(), pub.c_str(),
+                k.public_z85.c_str());
     return 0;
   } catch (const std::invalid_argument& e) {  // a bad option value: usage/config (exit 2)
     std::fprintf(stderr, "p2i keygen: error: %s\n", e.what());
     return 2;
-} catch (const std::exception& e) {
+  } catch (const std::exception& e) {  // an IO error: runtime (exit 1)
     std::fprintf(stderr, "p2i keygen: error: %s\n", e.what());
     return 1;
   }

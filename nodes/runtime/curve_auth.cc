@@ -2,12 +2,14 @@
 /// @brief CURVE key files, key directory, ZAP handler thread and handshake monitor thread.
 #include "nodes/runtime/curve_auth.h"
 
+#include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <cerrno>
 #include <cstring>
 #include <functional>
 #include <fstream>
@@ -245,19 +247,48 @@ CurveKeyPair GenerateCurveKeyPair() {
 }
 
 void WriteKeyFile(const std::string& path, const CurveKeyPair& keys, bool with_secret) {
+  WriteKeyFileTmp(path, keys, with_secret);
+  CommitKeyFile(path);
+}
+
+std::string WriteKeyFileTmp(const std::string& path, const CurveKeyPair& keys, bool with_secret) {
   const std::string tmp = path + ".tmp";
-  {
-    std::FILE* f = std::fopen(tmp.c_str(), "w");
-    if (!f) throw std::runtime_error("cannot write " + tmp + ": check the folder exists");
-    ::fchmod(::fileno(f), with_secret ? 0600 : 0644);
-    std::fprintf(f, "# p2i CURVE %s, made by `p2i keygen`%s\npublic %s\n",
-                 with_secret ? "key pair" : "public key",
-                 with_secret ? " (secret: keep this file private)" : "", keys.public_z85.c_str());
-    if (with_secret) std::fprintf(f, "secret %s\n", keys.secret_z85.c_str());
-    if (std::fclose(f) != 0) throw std::runtime_error("cannot write " + tmp);
+  ::unlink(tmp.c_str());  // a leftover of an interrupted run (O_EXCL below refuses links)
+  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC,
+                        with_secret ? 0600 : 0644);
+  if (fd < 0)
+    throw std::runtime_error("cannot write " + tmp + ": " + std::strerror(errno) +
+                             " (check the folder exists and is writable)");
+  ::fchmod(fd, with_secret ? 0600 : 0644);  // whatever the umask
+  std::string text = std::string("# p2i CURVE ") + (with_secret ? "key pair" : "public key") +
+                     ", made by `p2i keygen`" +
+                     (with_secret ? " (secret: keep this file private)" : "") + "\npublic " +
+                     keys.public_z85 + "\n";
+  if (with_secret) text += "secret " + keys.secret_z85 + "\n";
+  bool ok = true;
+  for (size_t done = 0; ok && done < text.size();) {
+    const ssize_t n = ::write(fd, text.data() + done, text.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    ok = n > 0;
+    if (ok) done += static_cast<size_t>(n);
   }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0)
-    throw std::runtime_error("cannot rename " + tmp + " to " + path);
+  const int err = ok ? 0 : errno;
+  ok = ok && ::fsync(fd) == 0;
+  ok = ::close(fd) == 0 && ok;
+  if (!ok) {
+    ::unlink(tmp.c_str());  // never leave a half-written key behind
+    throw std::runtime_error("cannot write " + tmp + ": " + std::strerror(err ? err : errno));
+  }
+  return tmp;
+}
+
+void CommitKeyFile(const std::string& path) {
+  const std::string tmp = path + ".tmp";
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+    const int err = errno;
+    ::unlink(tmp.c_str());
+    throw std::runtime_error("cannot replace " + path + ": " + std::strerror(err));
+  }
 }
 
 CurveKeyPair ReadKeyFile(const std::string& path) {

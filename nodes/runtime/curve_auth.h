@@ -35,8 +35,16 @@ struct CurveKeyPair {
 bool CurveAvailable();
 /// A fresh key pair; throws std::runtime_error when CURVE is unavailable.
 CurveKeyPair GenerateCurveKeyPair();
-/// Writes `path` (mode 0600, "public"/"secret" lines) atomically. Throws on IO errors.
+/// Writes `path` ("public"/"secret" lines; mode 0600 with the secret, else 0644) atomically:
+/// WriteKeyFileTmp then CommitKeyFile. Throws on IO errors, leaving no .tmp file and `path` as
+/// it was.
 void WriteKeyFile(const std::string& path, const CurveKeyPair& keys, bool with_secret);
+/// The first half: writes and fsyncs `path`.tmp (created 0600 / 0644, never through a link) and
+/// returns its name; on an error removes it and throws. Lets `p2i keygen` write a key and its
+/// .pub before replacing either.
+std::string WriteKeyFileTmp(const std::string& path, const CurveKeyPair& keys, bool with_secret);
+/// The second half: renames `path`.tmp over `path`; on an error removes the .tmp and throws.
+void CommitKeyFile(const std::string& path);
 /// Reads a key file written by WriteKeyFile (or a bare Z85 public key line). Throws naming
 /// the file and line on a missing/invalid key.
 CurveKeyPair ReadKeyFile(const std::string& path);
