@@ -32,14 +32,8 @@ TEST_CASE("A scene pose survives ToMsg / FromMsg, in TUM order", "[unit]") {
 }
 
 TEST_CASE("CameraInfo survives ToMsg / FromMsg", "[unit]") {
-  scene::CameraInfo c;
-  c.image_width = 640;
-  c.image_height = 480;
-  c.camera_name = "kinect";
-  c.distortion_model = "plumb_bob";
+  scene::CameraInfo c = scene::CameraInfo::Pinhole(640, 480, 525, 520, 319.5, 239.5, "kinect");
   c.distortion_coefficients = {0.1, -0.2, 0.0, 0.0, 0.01};
-  c.camera_matrix = {525, 0, 319.5, 0, 525, 239.5, 0, 0, 1};
-  c.projection_matrix = {525, 0, 319.5, 0, 0, 525, 239.5, 0, 0, 0, 1, 0};
   msgs::pb::CameraInfo m;
   ToMsg(c, &m);
   CHECK(m.k_size() == 9);
@@ -51,6 +45,7 @@ TEST_CASE("CameraInfo survives ToMsg / FromMsg", "[unit]") {
   CHECK(back.distortion_model == "plumb_bob");
   CHECK(back.distortion_coefficients == c.distortion_coefficients);
   CHECK(back.camera_matrix == c.camera_matrix);
+  CHECK(back.fy() == 520);
   CHECK(back.projection_matrix == c.projection_matrix);
   CHECK(back.rectification_matrix == c.rectification_matrix);
 }

@@ -44,9 +44,7 @@ TEST_CASE("checkpoint round trip keeps weights and metadata", "[unit]") {
   meta.phase1_step = 17;
   meta.phase2_step = 4;
   meta.lr_scale = 0.25;
-  meta.camera.image_width = 32;
-  meta.camera.image_height = 32;
-  meta.camera.camera_matrix = {20, 0, 15.5, 0, 21, 15.5, 0, 0, 1};
+  meta.camera = p2i::scene::CameraInfo::Pinhole(32, 32, 20, 21, 15.5, 15.5);
   SaveCheckpoint(dir + "/c.pt", meta, a, {});
   torch::manual_seed(2);
   Networks b(c);

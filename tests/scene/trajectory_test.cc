@@ -130,10 +130,7 @@ TEST_CASE("Random walk stays in the room, off the furniture, moves smoothly, is 
     }
     CHECK(travelled > 0.5 * o.speed * o.duration);
     int looking_at_wall = 0;
-    p2i::scene::CameraInfo probe;
-    probe.image_width = 3;
-    probe.image_height = 3;
-    probe.camera_matrix = {2, 0, 1, 0, 2, 1, 0, 0, 1};
+    const auto probe = p2i::scene::CameraInfo::Pinhole(3, 3, 2, 2, 1, 1);
     for (std::size_t i = 0; i < t.size(); i += 10) {
       const float z = scene.Render(t[i].pose, probe).depth.at<float>(1, 1);
       if (z < 0.4f) ++looking_at_wall;
