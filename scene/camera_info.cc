@@ -368,26 +368,6 @@ CameraInfo CameraInfo::Cropped(int x0, int y0, int width, int height) const {
   return out;
 }
 
-CameraInfo CameraInfo::CenterCropResized(int width, int height) const {
-  if (width <= 0 || height <= 0 || image_width <= 0 || image_height <= 0) {
-    throw std::invalid_argument("CameraInfo::CenterCropResized: sizes must be positive (target " +
-                                std::to_string(width) + "x" + std::to_string(height) +
-                                ", camera " + std::to_string(image_width) + "x" +
-                                std::to_string(image_height) + ")");
-  }
-  // Same integer arithmetic as scene/image_ops.cc CenterCropRect() so the pixels and the
-  // intrinsics agree exactly.
-  const long long lhs = static_cast<long long>(image_width) * height;
-  const long long rhs = static_cast<long long>(width) * image_height;
-  int cw = image_width, ch = image_height;
-  if (lhs > rhs) {
-    cw = static_cast<int>((static_cast<long long>(image_height) * width + height / 2) / height);
-  } else if (lhs < rhs) {
-    ch = static_cast<int>((static_cast<long long>(image_width) * height + width / 2) / width);
-  }
-  return Cropped((image_width - cw) / 2, (image_height - ch) / 2, cw, ch).Scaled(width, height);
-}
-
 bool CameraInfo::equals(const CameraInfo& other, double tol) const {
   if (camera_name != other.camera_name || image_width != other.image_width ||
       image_height != other.image_height || distortion_model != other.distortion_model ||

@@ -49,9 +49,8 @@ struct CameraInfo {
   CameraInfo Scaled(int new_width, int new_height) const;
   /// The calibration for the crop of width x height starting at pixel (x0, y0).
   CameraInfo Cropped(int x0, int y0, int width, int height) const;
-  /// Centre crop to the target aspect ratio, then resize to width x height (what datasets use to
-  /// reach a square training resolution). The pixel operation lives in scene/image_ops.h.
-  CameraInfo CenterCropResized(int width, int height) const;
+  // Centre crop + resize to a training resolution: scene::CenterCropResizeCamera (image_ops.h),
+  // beside the pixel operation it matches.
 
   bool equals(const CameraInfo& other, double tol = 1e-9) const;
 };

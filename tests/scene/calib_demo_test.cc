@@ -3,6 +3,7 @@
 #include <catch2/catch.hpp>
 
 #include "scene/camera_info.h"
+#include "scene/image_ops.h"
 #include "tests/test_paths.h"
 
 using p2i::scene::CameraInfo;
@@ -10,7 +11,7 @@ using p2i::scene::CameraInfo;
 TEST_CASE("calib/sim_64.yaml is sim.yaml centre-cropped and resized to 64x64", "[unit]") {
   const std::string dir = p2i::testing::SourceDir() + "/calib/";
   const CameraInfo sim = CameraInfo::FromYamlFile(dir + "sim.yaml");
-  CameraInfo expected = sim.CenterCropResized(64, 64);
+  CameraInfo expected = p2i::scene::CenterCropResizeCamera(sim, 64, 64);
   expected.camera_name = "sim_64";
   const CameraInfo file = CameraInfo::FromYamlFile(dir + "sim_64.yaml");
   CHECK(file.equals(expected, 1e-9));

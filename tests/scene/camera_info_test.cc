@@ -213,24 +213,6 @@ TEST_CASE("CameraInfo::Cropped shifts the principal point by the crop origin", "
   CHECK_THROWS_AS(c.Cropped(-1, 0, 10, 10), std::invalid_argument);
 }
 
-TEST_CASE("CameraInfo::CenterCropResized: 640x480 to 128x128", "[unit]") {
-  const CameraInfo c = CameraInfo::Pinhole(640, 480, 525, 525, 319.5, 239.5, "sim");
-  const CameraInfo sq = c.CenterCropResized(128, 128);
-  // Centre crop 480x480 at x0 = 80, then scale 128/480.
-  const double s = 128.0 / 480.0;
-  CHECK(sq.image_width == 128);
-  CHECK(sq.image_height == 128);
-  CHECK(sq.fx() == Approx(525.0 * s));
-  CHECK(sq.fy() == Approx(525.0 * s));
-  CHECK(sq.cx() == Approx((319.5 - 80 + 0.5) * s - 0.5));  // = 63.5
-  CHECK(sq.cy() == Approx(63.5));
-  CHECK(sq.equals(c.Cropped(80, 0, 480, 480).Scaled(128, 128), 1e-12));
-  // Same aspect ratio: only scaling.
-  CHECK(c.CenterCropResized(320, 240).equals(c.Scaled(320, 240), 1e-12));
-  // Taller target (1:2): crop 240x480 at x0 = 200.
-  CHECK(c.CenterCropResized(64, 128).equals(c.Cropped(200, 0, 240, 480).Scaled(64, 128), 1e-12));
-}
-
 TEST_CASE("CameraInfo::equals compares every field within the tolerance", "[unit]") {
   const CameraInfo a = CameraInfo::FromYamlString(kTumFr1);
   CameraInfo b = a;

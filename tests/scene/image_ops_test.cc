@@ -62,11 +62,16 @@ TEST_CASE("Centre crop keeps the centre pixel and the camera sees it at the same
   // 480 pixels -> 128: focal scales by 128/480.
   CHECK(small.fx() == Approx(525.0 * 128.0 / 480.0).epsilon(1e-6));
   CHECK(small.fy() == Approx(525.0 * 128.0 / 480.0).epsilon(1e-6));
-  // The principal point stays near the middle (within the half-pixel convention).
-  CHECK(small.cx() == Approx(63.5).margin(0.6));
-  CHECK(small.cy() == Approx(63.5).margin(0.6));
-  // Same as the calibration engineer's one-call version.
-  CHECK(small.equals(cam.CenterCropResized(128, 128), 1e-6));
+  // Centre crop 480x480 at x0 = 80, then the pixel-centre convention: (319.5 - 80 + 0.5) * s - 0.5.
+  CHECK(small.cx() == Approx((319.5 - 80 + 0.5) * 128.0 / 480.0 - 0.5));  // = 63.5
+  CHECK(small.cy() == Approx(63.5));
+  CHECK(small.equals(cam.Cropped(80, 0, 480, 480).Scaled(128, 128), 1e-12));
+  // Same aspect ratio: only scaling.
+  CHECK(CenterCropResizeCamera(cam, 320, 240).equals(cam.Scaled(320, 240), 1e-12));
+  // Taller target (1:2): crop 240x480 at x0 = 200.
+  CHECK(CenterCropResizeCamera(cam, 64, 128)
+            .equals(cam.Cropped(200, 0, 240, 480).Scaled(64, 128), 1e-12));
+  CHECK_THROWS_AS(CenterCropResizeCamera(cam, 0, 128), std::invalid_argument);
 }
 
 }  // namespace
