@@ -5,6 +5,7 @@
 #include <stdexcept>
 #include <vector>
 
+#include "scene/image_ops.h"
 #include "scene/sim_scene.h"
 #include "scene/trajectory.h"
 
@@ -49,7 +50,10 @@ RgbdDataset RenderBuiltinDataset(const std::string& spec, const BuiltinDatasetOp
     picked = even;
   }
   RgbdDataset out;
-  out.camera = SimScene::DefaultCamera(options.width, options.height);
+  // The frames the sim camera (4:3, f = 525 at 640 px) delivers, centre-cropped and resized to
+  // width x height, as the trainer and the monitor see them: a square view has the crop's field
+  // of view, not the full width's (DefaultCamera(64, 64) has f = 52.5; the crop f = 70).
+  out.camera = CenterCropResizeCamera(SimScene::DefaultCamera(640, 480), options.width, options.height);
   for (size_t i : picked) {
     RgbdSample s;
     if (options.with_frames) s = sim.Render(sweep[i].pose, out.camera, sweep[i].stamp);

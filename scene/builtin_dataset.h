@@ -27,8 +27,10 @@ struct BuiltinDatasetOptions {
 
 /// `builtin:NAME` as training data: the built-in SimScene NAME rendered along the default arm
 /// sweep (ArmSweepOptions{}: three arcs at 1.0, 1.3 and 1.6 m, 20 poses/s, ~500 poses; the
-/// demo's measured trajectory) with the sim camera (SimScene::DefaultCamera: f = 525 at 640 px,
-/// centred principal point) at width x height. Frame ids are "sweep/<pose index>". Exact
+/// demo's measured trajectory) through the sim camera (SimScene::DefaultCamera(640, 480): f = 525
+/// at 640 px, centred principal point) centre-cropped and resized to width x height
+/// (CenterCropResizeCamera: what the camera node's frames become for the trainer and the
+/// monitor's ground truth), rendered directly at that camera. Frame ids are "sweep/<pose index>". Exact
 /// renders: no sensor noise. Throws std::invalid_argument for a spec without the prefix or bad
 /// options, std::runtime_error (listing the names) for an unknown scene.
 RgbdDataset RenderBuiltinDataset(const std::string& spec, const BuiltinDatasetOptions& options);

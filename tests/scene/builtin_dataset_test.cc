@@ -3,10 +3,12 @@
 /// max_frames, poses-only mode, errors.
 #include "scene/builtin_dataset.h"
 
+#include <cmath>
 #include <stdexcept>
 
 #include <catch2/catch.hpp>
 
+#include "scene/image_ops.h"
 #include "scene/sim_scene.h"
 #include "scene/trajectory.h"
 
@@ -25,8 +27,8 @@ TEST_CASE("builtin:NAME renders the default arm sweep with the sim camera", "[un
   CHECK(poses.frames[1].id == "sweep/50");
   CHECK(poses.frames[1].pose.equals(sweep[50].pose, 1e-12));
   CHECK(poses.frames[1].rgb.empty());
-  const CameraInfo cam = SimScene::DefaultCamera(32, 24);
-  CHECK(poses.camera.camera_matrix == cam.camera_matrix);  // f = 525 * 32 / 640
+  const CameraInfo cam = CenterCropResizeCamera(SimScene::DefaultCamera(640, 480), 32, 24);
+  CHECK(poses.camera.camera_matrix == cam.camera_matrix);  // 4:3: the whole frame, f = 525 * 32 / 640
 
   o.stride = 1;
   o.max_frames = 3;
@@ -44,6 +46,35 @@ TEST_CASE("builtin:NAME renders the default arm sweep with the sim camera", "[un
   CHECK_THROWS(RenderBuiltinDataset("builtin:no_such_office", o));
   o.width = 0;
   CHECK_THROWS_WITH(RenderBuiltinDataset("builtin:small_office", o), Catch::Contains("width"));
+}
+
+TEST_CASE("builtin:NAME square frames are the centre crop of the 4:3 sim camera's view", "[unit]") {
+  // The demo's monitor scores a 64x64 view against the 320x240 sim camera's frame centre-cropped
+  // and resized; the built-in training frames must show the same field of view (they had the
+  // full 640 px width's: f = 52.5 instead of 70, every served fusion/warp view zoomed out).
+  BuiltinDatasetOptions o;
+  o.width = 64;
+  o.height = 64;
+  o.max_frames = 2;
+  const RgbdDataset d = RenderBuiltinDataset("builtin:small_office", o);
+  REQUIRE(d.frames.size() == 2);
+  CHECK(d.camera.fx() == Approx(525.0 * 64 / 480));
+  CHECK(d.camera.fy() == Approx(525.0 * 64 / 480));
+  const SimScene sim = SimScene::FromSpec("builtin:small_office");
+  for (const RgbdSample& f : d.frames) {
+    const RgbdSample truth =
+        CenterCropResizeSample(sim.Render(f.pose, SimScene::DefaultCamera(320, 240)), 64, 64);
+    int close = 0, both = 0;
+    for (int v = 0; v < 64; ++v)
+      for (int u = 0; u < 64; ++u) {
+        const float a = f.depth.at<float>(v, u), b = truth.depth.at<float>(v, u);
+        if (!(a > 0.0f && b > 0.0f)) continue;
+        ++both;
+        if (std::abs(a - b) < 0.02f * b) ++close;
+      }
+    REQUIRE(both > 3000);
+    CHECK(close > 0.9 * both);  // the zoomed-out frames agree on far fewer pixels
+  }
 }
 
 }  // namespace
