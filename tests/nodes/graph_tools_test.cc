@@ -231,12 +231,13 @@ TEST_CASE("values accepted before are refused with exit 2", "[integration]") {
              Catch::Contains("--steps"));
   CHECK(code == 2);
   CHECK_THAT(Run(Bin("p2i_camera") + " width:=17000 height:=480", &code),
-             Catch::Contains("at most 8192"));
+             Catch::Contains("width must be in [0, 8192] (got 17000)"));
   CHECK(code == 2);
   CHECK_THAT(Run(Bin("p2i_synthesizer") + " method:=nearest threads:=-2", &code),
              Catch::Contains("threads must be >= 1 (got -2)"));
   CHECK(code == 2);
-  CHECK_THAT(Run(Bin("p2i_trainer") + " threads:=-2", &code), Catch::Contains("'threads' must be >= 1"));
+  CHECK_THAT(Run(Bin("p2i_trainer") + " threads:=-2", &code),
+             Catch::Contains("threads must be >= 1 (got -2)"));
   CHECK(code == 2);
   CHECK(Run(Bin("p2i") + " nosuchcommand", &code).find("unknown command") != std::string::npos);
   CHECK(code == 2);
