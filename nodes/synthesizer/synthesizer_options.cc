@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "model/method_registry.h"
+#include "nodes/runtime/option_error.h"
 
 namespace p2i::nodes {
 
@@ -41,16 +42,15 @@ SynthesizerOptions SynthesizerOptions::FromParameters(runtime::Parameters& param
 
 void SynthesizerOptions::Validate() const {
   core.Validate();
-  const auto at_least = [](const char* name, int value, int min) {
-    if (value < min) {
-      throw std::invalid_argument("synthesizer: " + std::string(name) + " must be >= " +
-                                  std::to_string(min) + " (got " + std::to_string(value) + ")");
-    }
-  };
-  at_least("width", width, 0);
-  at_least("height", height, 0);
-  at_least("dataset_stride", dataset_stride, 1);
-  at_least("threads", loader.threads, 1);
+  using runtime::CheckOption;
+  CheckOption(width >= 0, "synthesizer", "width", width, "be >= 0",
+              "0 (with height 0) = the dataset's own size");
+  CheckOption(height >= 0, "synthesizer", "height", height, "be >= 0",
+              "0 (with width 0) = the dataset's own size");
+  CheckOption(dataset_stride >= 1, "synthesizer", "dataset_stride", dataset_stride, "be >= 1",
+              "1 = every frame of the dataset");
+  CheckOption(loader.threads >= 1, "synthesizer", "threads", loader.threads, "be >= 1",
+              "e.g. threads:=1");
   if ((width == 0) != (height == 0)) {
     throw std::invalid_argument("synthesizer: width and height must both be > 0 or both 0 (got " +
                                 std::to_string(width) + "x" + std::to_string(height) + ")");
