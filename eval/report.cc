@@ -54,9 +54,9 @@ std::vector<std::string> StabilitySummary(const std::vector<StabilityPoint>& poi
   return out;
 }
 
-std::string RenderReportMarkdown(const ReportInputs& in) {
-  const auto& rows = in.chart_inputs.rows;
-  std::ostringstream md;
+namespace {
+
+void WriteHeader(const ReportInputs& in, std::ostringstream& md) {
   md << "# " << in.title << "\n\n";
   md << "| | |\n|---|---|\n";
   md << "| command | `" << in.command << "` |\n";
@@ -66,7 +66,9 @@ std::string RenderReportMarkdown(const ReportInputs& in) {
   md << "| run | " << in.started << " to " << in.finished << " (UTC) |\n";
   md << "| LPIPS-Squeeze | " << in.lpips_status << " |\n\n";
   for (const auto& n : in.notes) md << "> " << n << "\n\n";
+}
 
+void WriteResultsTable(const std::vector<ResultRow>& rows, std::ostringstream& md) {
   md << "## Results (one row per method, setting, size, seed)\n\n"
      << "PSNR/SSIM on RGB in [0, 1]; LPIPS-Squeeze (SqueezeNet backbone, not comparable with "
         "LPIPS-Alex); depth AbsRel / RMSE over pixels valid in both, `valid` = predicted share of "
@@ -93,34 +95,37 @@ std::string RenderReportMarkdown(const ReportInputs& in) {
        << F(r.coverage_spearman) << " | " << F(r.pose_dependence)
        << (r.pose_dependence < model::kPoseDependenceWarn ? " (collapsed)" : "") << " |\n";
   }
+}
 
-  // Seed spread (GAN stability).
+// Seed spread (GAN stability), when some combination ran with several seeds.
+void WriteSeedSpread(const std::vector<ResultRow>& rows, std::ostringstream& md) {
   std::map<std::string, std::vector<const ResultRow*>> groups;
   for (const auto& r : rows) groups[r.method + "|" + r.setting + "|" + r.size].push_back(&r);
   bool any_multi = false;
   for (const auto& g : groups) any_multi = any_multi || g.second.size() > 1;
-  if (any_multi) {
-    md << "\n## Seed spread (training stability)\n\n"
-          "| method | setting | size | seeds | PSNR mean ± sd (min-max) | SSIM mean ± sd | "
-          "LPIPS-Sq mean ± sd |\n|---|---|---|---|---|---|---|\n";
-    for (const auto& g : groups) {
-      if (g.second.size() < 2) continue;
-      std::vector<double> p, s, l;
-      for (const auto* r : g.second) {
-        p.push_back(r->psnr);
-        s.push_back(r->ssim);
-        l.push_back(r->lpips);
-      }
-      const auto sp = ComputeSpread(p), ss = ComputeSpread(s), sl = ComputeSpread(l);
-      const auto* r0 = g.second.front();
-      md << "| " << r0->method << " | " << r0->setting << " | " << r0->size << " | "
-         << g.second.size() << " | " << F(sp.mean) << " ± " << F(sp.stddev) << " (" << F(sp.min)
-         << "-" << F(sp.max) << ") | " << F(ss.mean, "%.3f") << " ± " << F(ss.stddev, "%.3f")
-         << " | " << F(sl.mean, "%.3f") << " ± " << F(sl.stddev, "%.3f") << " |\n";
+  if (!any_multi) return;
+  md << "\n## Seed spread (training stability)\n\n"
+        "| method | setting | size | seeds | PSNR mean ± sd (min-max) | SSIM mean ± sd | "
+        "LPIPS-Sq mean ± sd |\n|---|---|---|---|---|---|---|\n";
+  for (const auto& g : groups) {
+    if (g.second.size() < 2) continue;
+    std::vector<double> p, s, l;
+    for (const auto* r : g.second) {
+      p.push_back(r->psnr);
+      s.push_back(r->ssim);
+      l.push_back(r->lpips);
     }
+    const auto sp = ComputeSpread(p), ss = ComputeSpread(s), sl = ComputeSpread(l);
+    const auto* r0 = g.second.front();
+    md << "| " << r0->method << " | " << r0->setting << " | " << r0->size << " | "
+       << g.second.size() << " | " << F(sp.mean) << " ± " << F(sp.stddev) << " (" << F(sp.min)
+       << "-" << F(sp.max) << ") | " << F(ss.mean, "%.3f") << " ± " << F(ss.stddev, "%.3f")
+       << " | " << F(sl.mean, "%.3f") << " ± " << F(sl.stddev, "%.3f") << " |\n";
   }
+}
 
-  // Coverage score as an error predictor.
+// Coverage score as an error predictor.
+void WriteCoverage(const ReportInputs& in, std::ostringstream& md) {
   md << "\n## Coverage score vs error\n\nSpearman rank correlation between the coverage score "
         "of each test pose (model/coverage.h: 1 on the training trajectory, falling with the "
         "distance) and the PSNR of its view, per method (mean over its rows). Positive = the "
@@ -128,23 +133,28 @@ std::string RenderReportMarkdown(const ReportInputs& in) {
         "views.\n\n| method | mean rho | rows |\n|---|---|---|\n";
   for (const auto& m : in.chart_inputs.methods) {
     std::vector<double> v;
-    for (const auto& r : rows)
+    for (const auto& r : in.chart_inputs.rows)
       if (r.method == m) v.push_back(r.coverage_spearman);
     if (v.empty()) continue;
     const auto s = ComputeSpread(v);
     md << "| " << m << " | " << F(s.mean) << " | " << s.n << " of " << v.size() << " |\n";
   }
+}
 
+void WriteChartLinks(const ChartOutputs& charts, std::ostringstream& md) {
   md << "\n## Charts\n\n";
-  if (!in.charts.note.empty()) md << "> " << in.charts.note << "\n\n";
-  for (const auto& c : in.charts.charts) {
-    if (in.charts.gnuplot_ran)
+  if (!charts.note.empty()) md << "> " << charts.note << "\n\n";
+  for (const auto& c : charts.charts) {
+    if (charts.gnuplot_ran)
       md << "![" << c << "](charts/" << c << ".png)\n\n[" << c << ".svg](charts/" << c
          << ".svg)\n\n";
     else
       md << "- `charts/" << c << ".gp` (not rendered)\n";
   }
+}
 
+// Stability, auto-size and strips: each section only when the run has it.
+void WriteOptionalSections(const ReportInputs& in, std::ostringstream& md) {
   if (!in.chart_inputs.stability.empty()) {
     md << "\n## Stability: where methods fail\n\nOffsets swept outward from training poses of "
           "setting "
@@ -154,18 +164,28 @@ std::string RenderReportMarkdown(const ReportInputs& in) {
          StabilitySummary(in.chart_inputs.stability, in.chart_inputs.methods, in.chart_inputs.threshold_db))
       md << "- " << line << "\n";
   }
-
   if (!in.auto_size.empty()) {
     md << "\n## Model size (auto-size)\n\n";
     for (const auto& a : in.auto_size) md << a << "\n\n";
   }
-
   if (!in.strips.empty()) {
     md << "\n## Image strips\n\nGround truth (top row) next to every method for the same test "
           "poses: RGB | depth (turbo colour map, black = invalid/hole).\n\n";
     for (const auto& s : in.strips)
       md << "### setting " << s.first << "\n\n![strip " << s.first << "](" << s.second << ")\n\n";
   }
+}
+
+}  // namespace
+
+std::string RenderReportMarkdown(const ReportInputs& in) {
+  std::ostringstream md;
+  WriteHeader(in, md);
+  WriteResultsTable(in.chart_inputs.rows, md);
+  WriteSeedSpread(in.chart_inputs.rows, md);
+  WriteCoverage(in, md);
+  WriteChartLinks(in.charts, md);
+  WriteOptionalSections(in, md);
   return md.str();
 }
 
