@@ -48,6 +48,180 @@ struct Slot {
   Eigen::Vector3f centre;  // keyframe camera centre in the world
 };
 
+// The raycast of the view and zeroed planes for k keyframe slots.
+ViewCandidates EmptyCandidates(const scene::Pose& pose, const scene::CameraInfo& camera,
+                               const TsdfRaycast& ray, int k) {
+  const int w = camera.image_width, h = camera.image_height;
+  ViewCandidates c;
+  c.pose = pose;
+  c.camera = camera;
+  c.depth = ray.depth;
+  c.normals = ray.normals;
+  c.tsdf_colour = ray.colour;
+  c.observed = cv::Mat::zeros(h, w, CV_8UC1);
+  c.confidence = cv::Mat::zeros(h, w, CV_32FC1);
+  c.blended = cv::Mat::zeros(h, w, CV_32FC3);
+  c.colours.assign(static_cast<size_t>(k), cv::Mat());
+  c.weights.assign(static_cast<size_t>(k), cv::Mat());
+  for (int j = 0; j < k; ++j) {
+    c.colours[j] = cv::Mat::zeros(h, w, CV_32FC3);
+    c.weights[j] = cv::Mat::zeros(h, w, CV_32FC1);
+  }
+  return c;
+}
+
+// Keyframe slots for a view: nearest by pose, nearest first, minus an excluded one.
+std::vector<Slot> SelectSlots(const std::vector<scene::RgbdSample>& keyframes,
+                              const std::vector<scene::Pose>& poses, const scene::Pose& pose,
+                              int k, const CandidateRequest& request, double metres_per_degree) {
+  std::vector<Slot> slots;
+  const size_t want = static_cast<size_t>(k) + (request.exclude_keyframe ? 1 : 0);
+  for (size_t i : model::NearestPoseIndices(poses, pose, want, metres_per_degree)) {
+    if (request.exclude_keyframe && static_cast<int>(i) == *request.exclude_keyframe) continue;
+    if (static_cast<int>(slots.size()) == k) break;
+    Slot s;
+    s.index = static_cast<int>(i);
+    s.frame = &keyframes[i];
+    const Eigen::Matrix4d kw = keyframes[i].pose.Inverse().ToMatrix();
+    s.r_kw = kw.block<3, 3>(0, 0).cast<float>();
+    s.t_kw = kw.block<3, 1>(0, 3).cast<float>();
+    s.centre = keyframes[i].pose.translation().cast<float>();
+    slots.push_back(s);
+  }
+  return slots;
+}
+
+void RecordSlots(const std::vector<Slot>& slots, int k, ViewCandidates* c) {
+  c->keyframe_indices.assign(static_cast<size_t>(k), -1);
+  c->keyframe_ids.assign(static_cast<size_t>(k), "");
+  c->keyframe_poses.assign(static_cast<size_t>(k), scene::Pose());
+  for (size_t j = 0; j < slots.size(); ++j) {
+    c->keyframe_indices[j] = slots[j].index;
+    c->keyframe_ids[j] = slots[j].frame->id;
+    c->keyframe_poses[j] = slots[j].frame->pose;
+  }
+}
+
+// Sums over the pixels of a view for its CoverageSummary.
+struct BlendStats {
+  int64_t observed = 0, blended = 0;
+  double angle_sum = 0.0, conf_sum = 0.0;
+};
+
+// The per-pixel blend of one view: which slots see the raycast point (depth test), their
+// penalty (angle + resolution), grazing factor and colour, then the normalised weights, the
+// blended colour and the confidence. Holds the view's constants and per-pixel scratch arrays
+// (at most 16 slots, BlendOptions::Validate). Thread-compatible.
+class KeyframeBlender {
+ public:
+  KeyframeBlender(const scene::Pose& pose, const scene::CameraInfo& camera,
+                  const scene::CameraInfo& frame_camera, const BlendOptions& bo,
+                  const std::vector<Slot>& slots)
+      : slots_(slots) {
+    const Eigen::Matrix4d wc = pose.ToMatrix();
+    r_wc_ = wc.block<3, 3>(0, 0).cast<float>();
+    centre_ = wc.block<3, 1>(0, 3).cast<float>();
+    fx_ = static_cast<float>(camera.fx()), fy_ = static_cast<float>(camera.fy());
+    cx_ = static_cast<float>(camera.cx()), cy_ = static_cast<float>(camera.cy());
+    kfx_ = static_cast<float>(frame_camera.fx()), kfy_ = static_cast<float>(frame_camera.fy());
+    kcx_ = static_cast<float>(frame_camera.cx()), kcy_ = static_cast<float>(frame_camera.cy());
+    kw_ = frame_camera.image_width, kh_ = frame_camera.image_height;
+    vis_abs_ = static_cast<float>(bo.visibility_abs_m), vis_rel_ = static_cast<float>(bo.visibility_rel);
+    res_w_ = static_cast<float>(bo.resolution_weight), eps_ = static_cast<float>(bo.penalty_epsilon);
+    floor_g_ = static_cast<float>(bo.grazing_floor);
+    sigma_ = static_cast<float>(bo.angle_sigma_deg / kRadToDeg);
+  }
+
+  // Pixel (u, v) with raycast depth z and camera-frame normal n into c.
+  void Pixel(int u, int v, float z, const cv::Vec3f& n, ViewCandidates* c, BlendStats* stats) {
+    if (!(z > 0.0f)) return;
+    ++stats->observed;
+    c->observed.at<uint8_t>(v, u) = 255;
+    const Eigen::Vector3f xc((u - cx_) / fx_ * z, (v - cy_) / fy_ * z, z);
+    const Eigen::Vector3f xw = r_wc_ * xc + centre_;
+    const float dist0 = xc.norm();
+    const Eigen::Vector3f dir = (xw - centre_) / dist0;
+    const Eigen::Vector3f nw = r_wc_ * Eigen::Vector3f(n[0], n[1], n[2]);
+    float p_max = 0.0f;
+    if (ScoreSlots(xw, dir, nw, dist0, &p_max) == 0) {
+      c->blended.at<cv::Vec3f>(v, u) = c->tsdf_colour.at<cv::Vec3f>(v, u);
+      return;
+    }
+    ++stats->blended;
+    Mix(u, v, 1.5f * p_max + eps_, c, stats);
+  }
+
+ private:
+  // Visibility, penalty, angle, grazing factor and colour of each slot for world point xw;
+  // returns how many slots see it, *p_max the largest penalty among them.
+  int ScoreSlots(const Eigen::Vector3f& xw, const Eigen::Vector3f& dir, const Eigen::Vector3f& nw,
+                 float dist0, float* p_max) {
+    int n_vis = 0;
+    for (size_t j = 0; j < slots_.size(); ++j) {
+      vis_[j] = false;
+      const Slot& s = slots_[j];
+      const Eigen::Vector3f xk = s.r_kw * xw + s.t_kw;
+      if (!(xk.z() > 1e-4f)) continue;
+      const float pu = kfx_ * xk.x() / xk.z() + kcx_, pv = kfy_ * xk.y() / xk.z() + kcy_;
+      if (!(pu >= 0.0f && pv >= 0.0f && pu <= kw_ - 1.0f && pv <= kh_ - 1.0f)) continue;
+      const float dk = s.frame->depth.at<float>(static_cast<int>(pv + 0.5f), static_cast<int>(pu + 0.5f));
+      if (!(dk > 0.0f) || std::fabs(dk - xk.z()) > std::max(vis_abs_, vis_rel_ * xk.z())) continue;
+      const Eigen::Vector3f to_k = s.centre - xw;  // point -> keyframe camera
+      const float dist_k = to_k.norm();
+      const Eigen::Vector3f dir_k = -to_k / dist_k;  // keyframe camera -> point
+      const float a = std::atan2(dir.cross(dir_k).norm(), dir.dot(dir_k));
+      const float res = std::max(0.0f, (dist_k - dist0) / dist0);
+      pen_[j] = a + res_w_ * res;
+      ang_[j] = a;
+      graze_[j] = std::max(floor_g_, nw.dot(to_k) / dist_k);
+      col_[j] = Bilinear(s.frame->rgb, pu, pv);
+      vis_[j] = true;
+      *p_max = std::max(*p_max, pen_[j]);
+      ++n_vis;
+    }
+    return n_vis;
+  }
+
+  // The weights of the visible slots (penalties scaled by p_max), the blended colour and the
+  // confidence of the best-angle slot.
+  void Mix(int u, int v, float p_max, ViewCandidates* c, BlendStats* stats) {
+    float wsum = 0.0f, a_min = 1e9f, g_best = 0.0f;
+    for (size_t j = 0; j < slots_.size(); ++j) {
+      if (!vis_[j]) continue;
+      const float q = 1.0f - pen_[j] / p_max;
+      wgt_[j] = q * q / (pen_[j] + eps_) * graze_[j];
+      wsum += wgt_[j];
+      if (ang_[j] < a_min) {
+        a_min = ang_[j];
+        g_best = graze_[j];
+      }
+    }
+    cv::Vec3f out(0.0f, 0.0f, 0.0f);
+    for (size_t j = 0; j < slots_.size(); ++j) {
+      if (!vis_[j]) continue;
+      const float a = wgt_[j] / wsum;
+      c->weights[j].at<float>(v, u) = a;
+      c->colours[j].at<cv::Vec3f>(v, u) = col_[j];
+      out += a * col_[j];
+    }
+    c->blended.at<cv::Vec3f>(v, u) = out;
+    const float conf = std::exp(-(a_min / sigma_) * (a_min / sigma_)) * g_best;
+    c->confidence.at<float>(v, u) = conf;
+    stats->angle_sum += a_min * kRadToDeg;
+    stats->conf_sum += conf;
+  }
+
+  const std::vector<Slot>& slots_;
+  Eigen::Matrix3f r_wc_;
+  Eigen::Vector3f centre_;
+  float fx_, fy_, cx_, cy_, kfx_, kfy_, kcx_, kcy_;
+  int kw_, kh_;
+  float vis_abs_, vis_rel_, res_w_, eps_, floor_g_, sigma_;
+  std::array<float, 16> pen_{}, graze_{}, ang_{}, wgt_{};
+  std::array<cv::Vec3f, 16> col_{};
+  std::array<bool, 16> vis_{};
+};
+
 }  // namespace
 
 BlendOptions BlendOptions::FromYaml(const YAML::Node& node, const std::string& source) {
@@ -144,145 +318,24 @@ bool FusionScene::AddFrame(const scene::RgbdSample& frame, bool integrate) {
 
 ViewCandidates FusionScene::RenderCandidates(const scene::Pose& pose, const scene::CameraInfo& camera,
                                              const CandidateRequest& request) {
-  const BlendOptions& bo = options_.blend;
-  const int w = camera.image_width, h = camera.image_height;
-  const int k = bo.k;
-  TsdfRaycast ray = tsdf_.Raycast(pose, camera);
-
-  ViewCandidates c;
-  c.pose = pose;
-  c.camera = camera;
-  c.depth = ray.depth;
-  c.normals = ray.normals;
-  c.tsdf_colour = ray.colour;
-  c.observed = cv::Mat::zeros(h, w, CV_8UC1);
-  c.confidence = cv::Mat::zeros(h, w, CV_32FC1);
-  c.blended = cv::Mat::zeros(h, w, CV_32FC3);
-  c.colours.assign(static_cast<size_t>(k), cv::Mat());
-  c.weights.assign(static_cast<size_t>(k), cv::Mat());
-  for (int j = 0; j < k; ++j) {
-    c.colours[j] = cv::Mat::zeros(h, w, CV_32FC3);
-    c.weights[j] = cv::Mat::zeros(h, w, CV_32FC1);
-  }
-
-  // Keyframe slots for this view: nearest by pose, nearest first, minus an excluded one.
-  std::vector<Slot> slots;
-  {
-    const size_t want = static_cast<size_t>(k) + (request.exclude_keyframe ? 1 : 0);
-    for (size_t i : model::NearestPoseIndices(poses_, pose, want, bo.metres_per_degree)) {
-      if (request.exclude_keyframe && static_cast<int>(i) == *request.exclude_keyframe) continue;
-      if (static_cast<int>(slots.size()) == k) break;
-      Slot s;
-      s.index = static_cast<int>(i);
-      s.frame = &keyframes_[i];
-      const Eigen::Matrix4d kw = keyframes_[i].pose.Inverse().ToMatrix();
-      s.r_kw = kw.block<3, 3>(0, 0).cast<float>();
-      s.t_kw = kw.block<3, 1>(0, 3).cast<float>();
-      s.centre = keyframes_[i].pose.translation().cast<float>();
-      slots.push_back(s);
-    }
-  }
-  c.keyframe_indices.assign(static_cast<size_t>(k), -1);
-  c.keyframe_ids.assign(static_cast<size_t>(k), "");
-  c.keyframe_poses.assign(static_cast<size_t>(k), scene::Pose());
-  for (size_t j = 0; j < slots.size(); ++j) {
-    c.keyframe_indices[j] = slots[j].index;
-    c.keyframe_ids[j] = slots[j].frame->id;
-    c.keyframe_poses[j] = slots[j].frame->pose;
-  }
-
-  const Eigen::Matrix4d wc = pose.ToMatrix();
-  const Eigen::Matrix3f r_wc = wc.block<3, 3>(0, 0).cast<float>();
-  const Eigen::Vector3f centre = wc.block<3, 1>(0, 3).cast<float>();
-  const float fx = static_cast<float>(camera.fx()), fy = static_cast<float>(camera.fy());
-  const float cx = static_cast<float>(camera.cx()), cy = static_cast<float>(camera.cy());
-  const float kfx = static_cast<float>(frame_camera_.fx()), kfy = static_cast<float>(frame_camera_.fy());
-  const float kcx = static_cast<float>(frame_camera_.cx()), kcy = static_cast<float>(frame_camera_.cy());
-  const int kw_ = frame_camera_.image_width, kh = frame_camera_.image_height;
-  const float vis_abs = static_cast<float>(bo.visibility_abs_m), vis_rel = static_cast<float>(bo.visibility_rel);
-  const float res_w = static_cast<float>(bo.resolution_weight), eps = static_cast<float>(bo.penalty_epsilon);
-  const float floor_g = static_cast<float>(bo.grazing_floor);
-  const float sigma = static_cast<float>(bo.angle_sigma_deg / kRadToDeg);
-
-  int64_t observed = 0, blended = 0;
-  double angle_sum = 0.0, conf_sum = 0.0;
-  std::array<float, 16> pen{}, graze{}, ang{}, wgt{};
-  std::array<cv::Vec3f, 16> col{};
-  std::array<bool, 16> vis{};
-  for (int v = 0; v < h; ++v) {
+  const int k = options_.blend.k;
+  ViewCandidates c = EmptyCandidates(pose, camera, tsdf_.Raycast(pose, camera), k);
+  const std::vector<Slot> slots = SelectSlots(keyframes_, poses_, pose, k, request,
+                                              options_.blend.metres_per_degree);
+  RecordSlots(slots, k, &c);
+  KeyframeBlender blender(pose, camera, frame_camera_, options_.blend, slots);
+  BlendStats stats;
+  for (int v = 0; v < camera.image_height; ++v) {
     const float* drow = c.depth.ptr<float>(v);
     const cv::Vec3f* nrow = c.normals.ptr<cv::Vec3f>(v);
-    for (int u = 0; u < w; ++u) {
-      const float z = drow[u];
-      if (!(z > 0.0f)) continue;
-      ++observed;
-      c.observed.at<uint8_t>(v, u) = 255;
-      const Eigen::Vector3f xc((u - cx) / fx * z, (v - cy) / fy * z, z);
-      const Eigen::Vector3f xw = r_wc * xc + centre;
-      const float dist0 = xc.norm();
-      const Eigen::Vector3f dir = (xw - centre) / dist0;
-      const Eigen::Vector3f nw = r_wc * Eigen::Vector3f(nrow[u][0], nrow[u][1], nrow[u][2]);
-      float p_max = 0.0f;
-      int n_vis = 0;
-      for (size_t j = 0; j < slots.size(); ++j) {
-        vis[j] = false;
-        const Slot& s = slots[j];
-        const Eigen::Vector3f xk = s.r_kw * xw + s.t_kw;
-        if (!(xk.z() > 1e-4f)) continue;
-        const float pu = kfx * xk.x() / xk.z() + kcx, pv = kfy * xk.y() / xk.z() + kcy;
-        if (!(pu >= 0.0f && pv >= 0.0f && pu <= kw_ - 1.0f && pv <= kh - 1.0f)) continue;
-        const float dk = s.frame->depth.at<float>(static_cast<int>(pv + 0.5f), static_cast<int>(pu + 0.5f));
-        if (!(dk > 0.0f) || std::fabs(dk - xk.z()) > std::max(vis_abs, vis_rel * xk.z())) continue;
-        const Eigen::Vector3f to_k = s.centre - xw;  // point -> keyframe camera
-        const float dist_k = to_k.norm();
-        const Eigen::Vector3f dir_k = -to_k / dist_k;  // keyframe camera -> point
-        const float a = std::atan2(dir.cross(dir_k).norm(), dir.dot(dir_k));
-        const float res = std::max(0.0f, (dist_k - dist0) / dist0);
-        pen[j] = a + res_w * res;
-        ang[j] = a;
-        graze[j] = std::max(floor_g, nw.dot(to_k) / dist_k);
-        col[j] = Bilinear(s.frame->rgb, pu, pv);
-        vis[j] = true;
-        p_max = std::max(p_max, pen[j]);
-        ++n_vis;
-      }
-      if (n_vis == 0) {
-        c.blended.at<cv::Vec3f>(v, u) = c.tsdf_colour.at<cv::Vec3f>(v, u);
-        continue;
-      }
-      ++blended;
-      p_max = 1.5f * p_max + eps;
-      float wsum = 0.0f, a_min = 1e9f, g_best = 0.0f;
-      for (size_t j = 0; j < slots.size(); ++j) {
-        if (!vis[j]) continue;
-        const float q = 1.0f - pen[j] / p_max;
-        wgt[j] = q * q / (pen[j] + eps) * graze[j];
-        wsum += wgt[j];
-        if (ang[j] < a_min) {
-          a_min = ang[j];
-          g_best = graze[j];
-        }
-      }
-      cv::Vec3f out(0.0f, 0.0f, 0.0f);
-      for (size_t j = 0; j < slots.size(); ++j) {
-        if (!vis[j]) continue;
-        const float a = wgt[j] / wsum;
-        c.weights[j].at<float>(v, u) = a;
-        c.colours[j].at<cv::Vec3f>(v, u) = col[j];
-        out += a * col[j];
-      }
-      c.blended.at<cv::Vec3f>(v, u) = out;
-      const float conf = std::exp(-(a_min / sigma) * (a_min / sigma)) * g_best;
-      c.confidence.at<float>(v, u) = conf;
-      angle_sum += a_min * kRadToDeg;
-      conf_sum += conf;
-    }
+    for (int u = 0; u < camera.image_width; ++u) blender.Pixel(u, v, drow[u], nrow[u], &c, &stats);
   }
-  const double n = static_cast<double>(w) * h;
-  c.coverage.observed_fraction = observed / n;
-  c.coverage.blended_fraction = blended / n;
-  c.coverage.mean_angle_deg = blended > 0 ? angle_sum / static_cast<double>(blended) : 0.0;
-  c.coverage.score = conf_sum / n;
+  const double n = static_cast<double>(camera.image_width) * camera.image_height;
+  c.coverage.observed_fraction = stats.observed / n;
+  c.coverage.blended_fraction = stats.blended / n;
+  c.coverage.mean_angle_deg =
+      stats.blended > 0 ? stats.angle_sum / static_cast<double>(stats.blended) : 0.0;
+  c.coverage.score = stats.conf_sum / n;
   return c;
 }
 
