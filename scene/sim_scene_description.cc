@@ -37,6 +37,141 @@ SimTexture ParseTexture(const StrictYamlReader& r, const YAML::Node& node) {
   return it->second;
 }
 
+SimMaterial ParseMaterial(const StrictYamlReader& r, const YAML::Node& key,
+                          const YAML::Node& node) {
+  SimMaterial m;
+  m.name = key.as<std::string>();
+  const std::string what = "material '" + m.name + "'";
+  r.CheckKeys(node, {"texture", "color", "color2", "scale", "seed", "specular", "shininess"}, what);
+  if (node["texture"]) m.texture = ParseTexture(r, node["texture"]);
+  r.OptionalVec3(node, "color", what, &m.color);
+  r.OptionalVec3(node, "color2", what, &m.color2);
+  r.OptionalDouble(node, "scale", what, &m.scale);
+  r.OptionalDouble(node, "specular", what, &m.specular);
+  r.OptionalDouble(node, "shininess", what, &m.shininess);
+  m.seed = HashName(m.name);
+  if (node["seed"]) m.seed = static_cast<std::uint32_t>(r.Double(node["seed"], what + ".seed"));
+  return m;
+}
+
+// Material name -> index into SimSceneDescription::materials.
+class MaterialNames {
+ public:
+  explicit MaterialNames(const StrictYamlReader& r) : r_(r) {}
+  void Add(const YAML::Node& key, const std::string& name, int index) {
+    if (index_.count(name)) r_.Fail(key, "duplicate material '" + name + "'");
+    index_[name] = index;
+  }
+  // The index of the material `node` names; fails naming `what` when it is not defined.
+  int Lookup(const YAML::Node& node, const std::string& what) const {
+    const std::string name = r_.String(node, what);
+    const auto it = index_.find(name);
+    if (it == index_.end()) {
+      r_.Fail(node, what + ": unknown material '" + name + "' (define it under materials:)");
+    }
+    return it->second;
+  }
+
+ private:
+  const StrictYamlReader& r_;
+  std::map<std::string, int> index_;
+};
+
+MaterialNames ReadMaterials(const StrictYamlReader& r, const YAML::Node& root,
+                            SimSceneDescription* d) {
+  MaterialNames names(r);
+  const YAML::Node materials = r.Require(root, "materials", "scene");
+  r.CheckMap(materials, "materials");
+  for (const auto& kv : materials) {
+    const SimMaterial m = ParseMaterial(r, kv.first, kv.second);
+    names.Add(kv.first, m.name, static_cast<int>(d->materials.size()));
+    d->materials.push_back(m);
+  }
+  return names;
+}
+
+void ReadRoom(const StrictYamlReader& r, const MaterialNames& materials, const YAML::Node& root,
+              SimSceneDescription* d) {
+  const YAML::Node room = r.Require(root, "room", "scene");
+  r.CheckKeys(room, {"size", "floor", "ceiling", "walls"}, "room");
+  d->room_size = r.Vec3(r.Require(room, "size", "room"), "room.size");
+  d->floor_material = materials.Lookup(r.Require(room, "floor", "room"), "room.floor");
+  d->ceiling_material = materials.Lookup(r.Require(room, "ceiling", "room"), "room.ceiling");
+  const YAML::Node walls = r.Require(room, "walls", "room");
+  if (walls.IsSequence()) {
+    if (walls.size() != 4) r.Fail(walls, "room.walls must be one material or a list of 4");
+    for (int i = 0; i < 4; ++i) d->wall_materials[i] = materials.Lookup(walls[i], "room.walls");
+  } else {
+    const int m = materials.Lookup(walls, "room.walls");
+    for (int& w : d->wall_materials) w = m;
+  }
+}
+
+SimLight ParseLight(const StrictYamlReader& r, const YAML::Node& ln) {
+  SimLight l;
+  r.CheckKeys(ln, {"type", "position", "direction", "color", "intensity", "range"}, "light");
+  const std::string type = r.String(r.Require(ln, "type", "light"), "light.type");
+  if (type == "point") {
+    l.type = SimLight::Type::kPoint;
+    l.position = r.Vec3(r.Require(ln, "position", "point light"), "light.position");
+    if (ln["direction"]) r.Fail(ln["direction"], "a point light has no direction");
+  } else if (type == "directional") {
+    l.type = SimLight::Type::kDirectional;
+    l.direction = r.Vec3(r.Require(ln, "direction", "directional light"), "light.direction");
+    if (ln["position"]) r.Fail(ln["position"], "a directional light has no position");
+  } else {
+    r.Fail(ln["type"], "unknown light type '" + type + "' (use point or directional)");
+  }
+  r.OptionalVec3(ln, "color", "light", &l.color);
+  r.OptionalDouble(ln, "intensity", "light", &l.intensity);
+  r.OptionalDouble(ln, "range", "light", &l.range);
+  return l;
+}
+
+void ReadLights(const StrictYamlReader& r, const YAML::Node& root, SimSceneDescription* d) {
+  if (!root["lights"]) return;
+  const YAML::Node lights = root["lights"];
+  if (!lights.IsSequence()) r.Fail(lights, "lights must be a list");
+  for (const auto& ln : lights) d->lights.push_back(ParseLight(r, ln));
+}
+
+SimObject ParseObject(const StrictYamlReader& r, const MaterialNames& materials,
+                      const YAML::Node& on) {
+  SimObject o;
+  r.CheckMap(on, "object");
+  const std::string shape = r.String(r.Require(on, "shape", "object"), "object.shape");
+  o.name = on["name"] ? r.String(on["name"], "object.name") : shape;
+  const std::string what = "object '" + o.name + "'";
+  o.center = r.Vec3(r.Require(on, "center", what), what + ".center");
+  o.material = materials.Lookup(r.Require(on, "material", what), what + ".material");
+  if (shape == "box") {
+    o.shape = SimShape::kBox;
+    r.CheckKeys(on, {"name", "shape", "center", "size", "yaw_deg", "material"}, what);
+    o.size = r.Vec3(r.Require(on, "size", what), what + ".size");
+    r.OptionalDouble(on, "yaw_deg", what, &o.yaw_deg);
+  } else if (shape == "cylinder") {
+    o.shape = SimShape::kCylinder;
+    r.CheckKeys(on, {"name", "shape", "center", "radius", "height", "material"}, what);
+    o.radius = r.Double(r.Require(on, "radius", what), what + ".radius");
+    o.height = r.Double(r.Require(on, "height", what), what + ".height");
+  } else if (shape == "sphere") {
+    o.shape = SimShape::kSphere;
+    r.CheckKeys(on, {"name", "shape", "center", "radius", "material"}, what);
+    o.radius = r.Double(r.Require(on, "radius", what), what + ".radius");
+  } else {
+    r.Fail(on["shape"], "unknown shape '" + shape + "' (use box, cylinder or sphere)");
+  }
+  return o;
+}
+
+void ReadObjects(const StrictYamlReader& r, const MaterialNames& materials, const YAML::Node& root,
+                 SimSceneDescription* d) {
+  if (!root["objects"]) return;
+  const YAML::Node objects = root["objects"];
+  if (!objects.IsSequence()) r.Fail(objects, "objects must be a list");
+  for (const auto& on : objects) d->objects.push_back(ParseObject(r, materials, on));
+}
+
 }  // namespace
 
 SimSceneDescription SimSceneDescription::FromYamlFile(const std::string& path) {
@@ -62,110 +197,11 @@ SimSceneDescription SimSceneDescription::FromYamlString(const std::string& text,
   SimSceneDescription d;
   if (root["name"]) d.name = r.String(root["name"], "name");
   r.OptionalDouble(root, "ambient", "scene", &d.ambient);
-
   // Materials first: room and objects refer to them by name.
-  std::map<std::string, int> material_index;
-  const YAML::Node materials = r.Require(root, "materials", "scene");
-  r.CheckMap(materials, "materials");
-  for (const auto& kv : materials) {
-    SimMaterial m;
-    m.name = kv.first.as<std::string>();
-    const std::string what = "material '" + m.name + "'";
-    r.CheckKeys(kv.second, {"texture", "color", "color2", "scale", "seed", "specular", "shininess"},
-                what);
-    if (kv.second["texture"]) m.texture = ParseTexture(r, kv.second["texture"]);
-    r.OptionalVec3(kv.second, "color", what, &m.color);
-    r.OptionalVec3(kv.second, "color2", what, &m.color2);
-    r.OptionalDouble(kv.second, "scale", what, &m.scale);
-    r.OptionalDouble(kv.second, "specular", what, &m.specular);
-    r.OptionalDouble(kv.second, "shininess", what, &m.shininess);
-    m.seed = HashName(m.name);
-    if (kv.second["seed"]) {
-      m.seed = static_cast<std::uint32_t>(r.Double(kv.second["seed"], what + ".seed"));
-    }
-    if (material_index.count(m.name)) r.Fail(kv.first, "duplicate material '" + m.name + "'");
-    material_index[m.name] = static_cast<int>(d.materials.size());
-    d.materials.push_back(m);
-  }
-  const auto lookup = [&](const YAML::Node& node, const std::string& what) {
-    const std::string name = r.String(node, what);
-    const auto it = material_index.find(name);
-    if (it == material_index.end()) {
-      r.Fail(node, what + ": unknown material '" + name + "' (define it under materials:)");
-    }
-    return it->second;
-  };
-
-  const YAML::Node room = r.Require(root, "room", "scene");
-  r.CheckKeys(room, {"size", "floor", "ceiling", "walls"}, "room");
-  d.room_size = r.Vec3(r.Require(room, "size", "room"), "room.size");
-  d.floor_material = lookup(r.Require(room, "floor", "room"), "room.floor");
-  d.ceiling_material = lookup(r.Require(room, "ceiling", "room"), "room.ceiling");
-  const YAML::Node walls = r.Require(room, "walls", "room");
-  if (walls.IsSequence()) {
-    if (walls.size() != 4) r.Fail(walls, "room.walls must be one material or a list of 4");
-    for (int i = 0; i < 4; ++i) d.wall_materials[i] = lookup(walls[i], "room.walls");
-  } else {
-    const int m = lookup(walls, "room.walls");
-    for (int& w : d.wall_materials) w = m;
-  }
-
-  if (root["lights"]) {
-    const YAML::Node lights = root["lights"];
-    if (!lights.IsSequence()) r.Fail(lights, "lights must be a list");
-    for (const auto& ln : lights) {
-      SimLight l;
-      r.CheckKeys(ln, {"type", "position", "direction", "color", "intensity", "range"}, "light");
-      const std::string type = r.String(r.Require(ln, "type", "light"), "light.type");
-      if (type == "point") {
-        l.type = SimLight::Type::kPoint;
-        l.position = r.Vec3(r.Require(ln, "position", "point light"), "light.position");
-        if (ln["direction"]) r.Fail(ln["direction"], "a point light has no direction");
-      } else if (type == "directional") {
-        l.type = SimLight::Type::kDirectional;
-        l.direction = r.Vec3(r.Require(ln, "direction", "directional light"), "light.direction");
-        if (ln["position"]) r.Fail(ln["position"], "a directional light has no position");
-      } else {
-        r.Fail(ln["type"], "unknown light type '" + type + "' (use point or directional)");
-      }
-      r.OptionalVec3(ln, "color", "light", &l.color);
-      r.OptionalDouble(ln, "intensity", "light", &l.intensity);
-      r.OptionalDouble(ln, "range", "light", &l.range);
-      d.lights.push_back(l);
-    }
-  }
-
-  if (root["objects"]) {
-    const YAML::Node objects = root["objects"];
-    if (!objects.IsSequence()) r.Fail(objects, "objects must be a list");
-    for (const auto& on : objects) {
-      SimObject o;
-      r.CheckMap(on, "object");
-      const std::string shape = r.String(r.Require(on, "shape", "object"), "object.shape");
-      o.name = on["name"] ? r.String(on["name"], "object.name") : shape;
-      const std::string what = "object '" + o.name + "'";
-      o.center = r.Vec3(r.Require(on, "center", what), what + ".center");
-      o.material = lookup(r.Require(on, "material", what), what + ".material");
-      if (shape == "box") {
-        o.shape = SimShape::kBox;
-        r.CheckKeys(on, {"name", "shape", "center", "size", "yaw_deg", "material"}, what);
-        o.size = r.Vec3(r.Require(on, "size", what), what + ".size");
-        r.OptionalDouble(on, "yaw_deg", what, &o.yaw_deg);
-      } else if (shape == "cylinder") {
-        o.shape = SimShape::kCylinder;
-        r.CheckKeys(on, {"name", "shape", "center", "radius", "height", "material"}, what);
-        o.radius = r.Double(r.Require(on, "radius", what), what + ".radius");
-        o.height = r.Double(r.Require(on, "height", what), what + ".height");
-      } else if (shape == "sphere") {
-        o.shape = SimShape::kSphere;
-        r.CheckKeys(on, {"name", "shape", "center", "radius", "material"}, what);
-        o.radius = r.Double(r.Require(on, "radius", what), what + ".radius");
-      } else {
-        r.Fail(on["shape"], "unknown shape '" + shape + "' (use box, cylinder or sphere)");
-      }
-      d.objects.push_back(o);
-    }
-  }
+  const MaterialNames materials = ReadMaterials(r, root, &d);
+  ReadRoom(r, materials, root, &d);
+  ReadLights(r, root, &d);
+  ReadObjects(r, materials, root, &d);
   try {
     d.Validate();
   } catch (const std::invalid_argument& e) {
