@@ -125,71 +125,52 @@ std::string CommandLine(const std::vector<std::string>& argv) {
   return line;
 }
 
-int RunLaunch(const std::vector<std::string>& args) {
-  Options o;
-  const int parse = ParseArgs(args, &o);
-  if (parse >= 0) return parse;
-  if (o.show_args) return ShowArgs(o.file);
-
-  LaunchDescription description =
-      LaunchDescriptionReader::ReadFile(o.file, ParseLaunchOverrides(o.overrides));
-  // Multi-host files: only this machine's part, wired to the other machines' registries.
-  const MachinePlan plan = PlanMachine(description, o.machine);
-  if (plan.multi_host) {
-    std::fprintf(stderr, "[launch] machine %s (%s): %zu of %zu nodes; peers %s\n",
-                 plan.self.name.c_str(), plan.self.address.c_str(), plan.nodes.size(),
-                 description.nodes.size(), plan.PeersText().c_str());
-    description.nodes = plan.nodes;
+// --dry-run: a node's command line, flags and inline parameter files as comments.
+void PrintDryRunNode(const NodeDescription& node, const NodeCommand& cmd) {
+  std::string flags;
+  if (node.required) flags += ", required";
+  if (node.respawn) {
+    char delay[32];
+    std::snprintf(delay, sizeof(delay), "%g", node.respawn_delay);
+    flags += std::string(", respawn after ") + delay + " s";
   }
-  if (description.nodes.empty()) {
-    std::fprintf(stderr, "[launch] %s starts no nodes\n", o.file.c_str());
-    return 0;
+  if (node.output != "screen") flags += ", output " + node.output;
+  std::printf("# [%s] %s%s\n%s\n", cmd.display_name.c_str(), node.source.c_str(), flags.c_str(),
+              CommandLine(cmd.argv).c_str());
+  for (const auto& [path, text] : cmd.param_files) {
+    std::printf("#   %s:\n", path.c_str());
+    size_t start = 0, nl;
+    while ((nl = text.find('\n', start)) != std::string::npos) {
+      std::printf("#     %s\n", text.substr(start, nl - start).c_str());
+      start = nl + 1;
+    }
   }
+}
 
-  const std::string self_dir = SelfDir();
-  // Launches killed with SIGKILL could not clean up: remove their folders now.
-  if (!o.dry_run) {
-    for (const auto& dir : RemoveStaleLaunchDirs("/tmp/p2i-" + Uid()))
-      std::fprintf(stderr, "[launch] removed %s (left by a launcher that is no longer running)\n",
-                   dir.c_str());
-  }
-  const std::string params_dir = MakeLaunchParamsDir();
-
+// The processes to start, one per node, with their parameter files written to params_dir.
+struct NodeProcesses {
   std::vector<ProcessSpec> specs;
-  std::string missing;
+  std::string missing;  // one line per node whose executable was not found
   bool any_param_file = false;
+};
+
+NodeProcesses BuildProcesses(const LaunchDescription& description, const std::string& params_dir,
+                             bool dry_run) {
+  const std::string self_dir = SelfDir();
+  NodeProcesses out;
   for (size_t i = 0; i < description.nodes.size(); ++i) {
     const NodeDescription& node = description.nodes[i];
     std::string searched;
     std::string exe = FindNodeExecutable(node.exec, self_dir, &searched);
     if (exe.empty()) {
-      missing += "  " + node.source + ": node '" + node.DisplayName() + "': exec '" + node.exec +
-                 "' not found (looked for " + searched + ")\n";
+      out.missing += "  " + node.source + ": node '" + node.DisplayName() + "': exec '" +
+                     node.exec + "' not found (looked for " + searched + ")\n";
       exe = "p2i_" + node.exec;
     }
     const NodeCommand cmd = BuildNodeCommand(node, exe, params_dir, static_cast<int>(i));
     WriteParamFiles(cmd);
-    any_param_file = any_param_file || !cmd.param_files.empty();
-    if (o.dry_run) {
-      std::string flags;
-      if (node.required) flags += ", required";
-      if (node.respawn) {
-        char delay[32];
-        std::snprintf(delay, sizeof(delay), "%g", node.respawn_delay);
-        flags += std::string(", respawn after ") + delay + " s";
-      }
-      if (node.output != "screen") flags += ", output " + node.output;
-      std::printf("# [%s] %s%s\n%s\n", cmd.display_name.c_str(), node.source.c_str(),
-                  flags.c_str(), CommandLine(cmd.argv).c_str());
-      for (const auto& [path, text] : cmd.param_files) {
-        std::printf("#   %s:\n", path.c_str());
-        size_t start = 0, nl;
-        while ((nl = text.find('\n', start)) != std::string::npos) {
-          std::printf("#     %s\n", text.substr(start, nl - start).c_str());
-          start = nl + 1;
-        }
-      }
-    }
+    out.any_param_file = out.any_param_file || !cmd.param_files.empty();
+    if (dry_run) PrintDryRunNode(node, cmd);
     ProcessSpec spec;
     spec.name = cmd.display_name;
     spec.argv = cmd.argv;
@@ -197,26 +178,16 @@ int RunLaunch(const std::vector<std::string>& args) {
     spec.respawn_delay = node.respawn_delay;
     spec.required = node.required;
     spec.output = node.output;
-    specs.push_back(std::move(spec));
+    out.specs.push_back(std::move(spec));
   }
-  if (!missing.empty()) {
-    std::fprintf(stderr, "p2i launch: executables not found:\n%s(build them, or put them on "
-                         "$PATH)\n", missing.c_str());
-    if (!o.dry_run || !any_param_file) fs::remove_all(params_dir);
-    return 2;  // a configuration error: nothing started
-  }
-  if (o.dry_run) {
-    if (any_param_file) {
-      std::printf("# inline parameter files are kept in %s\n", params_dir.c_str());
-    } else {
-      fs::remove_all(params_dir);
-    }
-    return 0;
-  }
+  return out;
+}
 
-  // One run dir per launch unless the user chose one, so every node (and `p2i topic` given
-  // the same P2I_RUN_DIR) derives the same ipc:// endpoints, and two launches never collide.
-  bool own_run_dir = false;
+// One run dir per launch unless the user chose one, so every node (and `p2i topic` given
+// the same P2I_RUN_DIR) derives the same ipc:// endpoints, and two launches never collide.
+// Sets P2I_RUN_DIR; *own says whether the launch made it (and removes it at exit).
+std::string PrepareRunDir(const Options& o, bool* own) {
+  *own = false;
   std::string run_dir = o.run_dir;
   if (run_dir.empty()) {
     const char* env = std::getenv("P2I_RUN_DIR");
@@ -224,23 +195,30 @@ int RunLaunch(const std::vector<std::string>& args) {
       run_dir = env;
     } else {
       run_dir = "/tmp/p2i-" + Uid() + "/launch-" + std::to_string(::getpid());
-      own_run_dir = true;
+      *own = true;
     }
   }
   fs::create_directories(run_dir);
   fs::permissions(run_dir, fs::perms::owner_all, fs::perm_options::replace);
   ::setenv("P2I_RUN_DIR", run_dir.c_str(), 1);
   std::fprintf(stderr, "[launch] P2I_RUN_DIR=%s%s\n", run_dir.c_str(),
-               own_run_dir ? " (`p2i topic` finds it; export it to look at this launch only)" : "");
+               *own ? " (`p2i topic` finds it; export it to look at this launch only)" : "");
+  return run_dir;
+}
 
-  std::unique_ptr<runtime::RegistryServer> registry_server;
-  if (plan.multi_host) {
-    ::setenv("P2I_HOST_ADDRESS", plan.self.address.c_str(), 1);
-    ::setenv("P2I_PEERS", plan.PeersText().c_str(), 1);
-    registry_server = std::make_unique<runtime::RegistryServer>(plan.self.RegistryEndpoint());
-    std::fprintf(stderr, "[launch] registry of this host at %s\n",
-                 registry_server->Endpoint().c_str());
-  }
+// Multi-host files: this host's registry, and the environment the nodes find their peers by.
+std::unique_ptr<runtime::RegistryServer> StartRegistry(const MachinePlan& plan) {
+  if (!plan.multi_host) return nullptr;
+  ::setenv("P2I_HOST_ADDRESS", plan.self.address.c_str(), 1);
+  ::setenv("P2I_PEERS", plan.PeersText().c_str(), 1);
+  auto server = std::make_unique<runtime::RegistryServer>(plan.self.RegistryEndpoint());
+  std::fprintf(stderr, "[launch] registry of this host at %s\n", server->Endpoint().c_str());
+  return server;
+}
+
+// Runs the processes until the launch ends; removes the launch's folders whatever happens.
+int RunProcesses(std::vector<ProcessSpec> specs, const Options& o, const std::string& params_dir,
+                 const std::string& run_dir, bool own_run_dir) {
   LaunchRunnerOptions runner_options;
   runner_options.grace_period = o.grace_period;
   runner_options.log_dir = !o.log_dir.empty()
@@ -261,6 +239,54 @@ int RunLaunch(const std::vector<std::string>& args) {
   if (own_run_dir) fs::remove_all(run_dir, ec);
   std::fprintf(stderr, "[launch] done, exit code %d\n", code);
   return code;
+}
+
+int RunLaunch(const std::vector<std::string>& args) {
+  Options o;
+  const int parse = ParseArgs(args, &o);
+  if (parse >= 0) return parse;
+  if (o.show_args) return ShowArgs(o.file);
+
+  LaunchDescription description =
+      LaunchDescriptionReader::ReadFile(o.file, ParseLaunchOverrides(o.overrides));
+  // Multi-host files: only this machine's part, wired to the other machines' registries.
+  const MachinePlan plan = PlanMachine(description, o.machine);
+  if (plan.multi_host) {
+    std::fprintf(stderr, "[launch] machine %s (%s): %zu of %zu nodes; peers %s\n",
+                 plan.self.name.c_str(), plan.self.address.c_str(), plan.nodes.size(),
+                 description.nodes.size(), plan.PeersText().c_str());
+    description.nodes = plan.nodes;
+  }
+  if (description.nodes.empty()) {
+    std::fprintf(stderr, "[launch] %s starts no nodes\n", o.file.c_str());
+    return 0;
+  }
+  // Launches killed with SIGKILL could not clean up: remove their folders now.
+  if (!o.dry_run) {
+    for (const auto& dir : RemoveStaleLaunchDirs("/tmp/p2i-" + Uid()))
+      std::fprintf(stderr, "[launch] removed %s (left by a launcher that is no longer running)\n",
+                   dir.c_str());
+  }
+  const std::string params_dir = MakeLaunchParamsDir();
+  NodeProcesses processes = BuildProcesses(description, params_dir, o.dry_run);
+  if (!processes.missing.empty()) {
+    std::fprintf(stderr, "p2i launch: executables not found:\n%s(build them, or put them on "
+                         "$PATH)\n", processes.missing.c_str());
+    if (!o.dry_run || !processes.any_param_file) fs::remove_all(params_dir);
+    return 2;  // a configuration error: nothing started
+  }
+  if (o.dry_run) {
+    if (processes.any_param_file) {
+      std::printf("# inline parameter files are kept in %s\n", params_dir.c_str());
+    } else {
+      fs::remove_all(params_dir);
+    }
+    return 0;
+  }
+  bool own_run_dir = false;
+  const std::string run_dir = PrepareRunDir(o, &own_run_dir);
+  const std::unique_ptr<runtime::RegistryServer> registry_server = StartRegistry(plan);
+  return RunProcesses(std::move(processes.specs), o, params_dir, run_dir, own_run_dir);
 }
 
 }  // namespace
