@@ -25,10 +25,143 @@ void WsServerOptions::Validate() const {
     throw std::invalid_argument("max_client_message_bytes: must be >= 256 bytes");
 }
 
+// The websocketpp server and what only its I/O thread touches; the handlers below run there.
+// Being WsServer's nested class, it updates the owner's stats and subscription counts.
 struct WsServer::Impl {
   struct Client {
     std::map<uint32_t, uint32_t> subs;  // subscription id -> channel id
   };
+  explicit Impl(WsServer& o) : owner(o) {}
+
+  // Handshake: only clients offering the Foxglove subprotocol.
+  bool Validate(Hdl hdl) {
+    auto con = server.get_con_from_hdl(hdl);
+    const auto& protos = con->get_requested_subprotocols();
+    if (std::find(protos.begin(), protos.end(), kSubprotocol) == protos.end()) {
+      ++owner.stats_.rejected;
+      return false;
+    }
+    con->select_subprotocol(kSubprotocol);
+    return true;
+  }
+
+  // A new client gets serverInfo and the channels advertised so far.
+  void Open(Hdl hdl) {
+    clients[hdl];
+    ++owner.stats_.clients;
+    ++owner.stats_.connections;
+    websocketpp::lib::error_code ec;
+    server.send(hdl, ServerInfoJson(owner.options_.name, session_id),
+                websocketpp::frame::opcode::text, ec);
+    std::vector<ChannelInfo> all;
+    for (const auto& [id, c] : channels) all.push_back(c);
+    if (!all.empty()) server.send(hdl, AdvertiseJson(all), websocketpp::frame::opcode::text, ec);
+  }
+
+  // A closed client's subscriptions no longer count.
+  void Drop(Hdl hdl) {
+    auto it = clients.find(hdl);
+    if (it == clients.end()) return;
+    {
+      std::lock_guard<std::mutex> lock(owner.wanted_mutex_);
+      for (const auto& [sub, ch] : it->second.subs) --owner.wanted_[ch];
+    }
+    clients.erase(it);
+    --owner.stats_.clients;
+  }
+
+  void ReplyError(Hdl hdl, const std::string& text) {
+    websocketpp::lib::error_code ec;
+    server.send(hdl, StatusJson(2, text), websocketpp::frame::opcode::text, ec);
+  }
+
+  // A client request: bad and unsupported ones are counted and answered with a status.
+  void Message(Hdl hdl, Server::message_ptr msg) {
+    auto it = clients.find(hdl);
+    if (it == clients.end()) return;
+    if (msg->get_opcode() != websocketpp::frame::opcode::text) {
+      ++owner.stats_.bad_requests;  // binary ops need capabilities this server does not advertise
+      ReplyError(hdl, "binary client messages are not supported (no clientPublish capability)");
+      return;
+    }
+    const ClientRequest r = ParseClientText(msg->get_payload());
+    if (r.kind == ClientRequest::kBad) {
+      ++owner.stats_.bad_requests;
+      ReplyError(hdl, "ignored a bad request: " + r.error);
+      return;
+    }
+    if (r.kind == ClientRequest::kUnsupported) {
+      ++owner.stats_.unsupported;
+      ReplyError(hdl, r.error);
+      return;
+    }
+    if (r.kind == ClientRequest::kSubscribe) {
+      Subscribe(hdl, r, &it->second);
+    } else {
+      Unsubscribe(hdl, r, &it->second);
+    }
+  }
+
+  // The first subscription of a channel calls on_subscribed.
+  void Subscribe(Hdl hdl, const ClientRequest& r, Client* client) {
+    for (const auto& [sub, ch] : r.subscriptions) {
+      if (!channels.count(ch)) {
+        ++owner.stats_.bad_requests;
+        ReplyError(hdl, "subscribe: unknown channel " + std::to_string(ch));
+        continue;
+      }
+      if (client->subs.count(sub)) {
+        ++owner.stats_.bad_requests;
+        ReplyError(hdl, "subscribe: subscription id " + std::to_string(sub) + " is in use");
+        continue;
+      }
+      client->subs[sub] = ch;
+      bool first = false;
+      {
+        std::lock_guard<std::mutex> lock(owner.wanted_mutex_);
+        first = owner.wanted_[ch]++ == 0;
+      }
+      if (first && owner.on_subscribed_) owner.on_subscribed_(ch);
+    }
+  }
+
+  void Unsubscribe(Hdl hdl, const ClientRequest& r, Client* client) {
+    for (uint32_t sub : r.unsubscribe_ids) {
+      auto s = client->subs.find(sub);
+      if (s == client->subs.end()) {
+        ++owner.stats_.bad_requests;
+        ReplyError(hdl, "unsubscribe: no subscription " + std::to_string(sub));
+        continue;
+      }
+      {
+        std::lock_guard<std::mutex> lock(owner.wanted_mutex_);
+        --owner.wanted_[s->second];
+      }
+      client->subs.erase(s);
+    }
+  }
+
+  // Binds the address and port of the options; returns the port bound (port 0: the one chosen).
+  int Listen(const WsServerOptions& o) {
+    websocketpp::lib::asio::error_code aec;
+    const auto address = websocketpp::lib::asio::ip::address::from_string(o.address, aec);
+    if (aec) {
+      throw std::runtime_error("foxglove_bridge: address '" + o.address +
+                               "' is not an IP address (e.g. 127.0.0.1 or 0.0.0.0)");
+    }
+    websocketpp::lib::error_code ec;
+    server.listen(websocketpp::lib::asio::ip::tcp::endpoint(address, static_cast<uint16_t>(o.port)),
+                  ec);
+    if (ec) {
+      throw std::runtime_error("foxglove_bridge: cannot listen on " + o.address + ":" +
+                               std::to_string(o.port) + ": " + ec.message() +
+                               " (set port:=N to another port, or port:=0 for any free one)");
+    }
+    const auto local = server.get_local_endpoint(aec);
+    return aec ? o.port : local.port();
+  }
+
+  WsServer& owner;
   Server server;
   std::map<Hdl, Client, std::owner_less<Hdl>> clients;  // I/O thread only
   std::map<uint32_t, ChannelInfo> channels;               // I/O thread only
@@ -36,7 +169,7 @@ struct WsServer::Impl {
 };
 
 WsServer::WsServer(WsServerOptions options, std::function<void(uint32_t)> on_subscribed)
-    : impl_(std::make_unique<Impl>()),
+    : impl_(std::make_unique<Impl>(*this)),
       options_(std::move(options)),
       on_subscribed_(std::move(on_subscribed)) {
   options_.Validate();
@@ -53,116 +186,13 @@ void WsServer::Start() {
   s.init_asio();
   s.set_reuse_addr(true);
   s.set_max_message_size(options_.max_client_message_bytes);
-  s.set_validate_handler([this](Hdl hdl) {
-    auto con = impl_->server.get_con_from_hdl(hdl);
-    const auto& protos = con->get_requested_subprotocols();
-    if (std::find(protos.begin(), protos.end(), kSubprotocol) == protos.end()) {
-      ++stats_.rejected;
-      return false;
-    }
-    con->select_subprotocol(kSubprotocol);
-    return true;
-  });
-  s.set_open_handler([this](Hdl hdl) {
-    impl_->clients[hdl];
-    ++stats_.clients;
-    ++stats_.connections;
-    websocketpp::lib::error_code ec;
-    impl_->server.send(hdl, ServerInfoJson(options_.name, impl_->session_id),
-                       websocketpp::frame::opcode::text, ec);
-    std::vector<ChannelInfo> all;
-    for (const auto& [id, c] : impl_->channels) all.push_back(c);
-    if (!all.empty())
-      impl_->server.send(hdl, AdvertiseJson(all), websocketpp::frame::opcode::text, ec);
-  });
-  auto drop_client = [this](Hdl hdl) {
-    auto it = impl_->clients.find(hdl);
-    if (it == impl_->clients.end()) return;
-    {
-      std::lock_guard<std::mutex> lock(wanted_mutex_);
-      for (const auto& [sub, ch] : it->second.subs) --wanted_[ch];
-    }
-    impl_->clients.erase(it);
-    --stats_.clients;
-  };
-  s.set_close_handler(drop_client);
+  Impl* impl = impl_.get();
+  s.set_validate_handler([impl](Hdl hdl) { return impl->Validate(hdl); });
+  s.set_open_handler([impl](Hdl hdl) { impl->Open(hdl); });
+  s.set_close_handler([impl](Hdl hdl) { impl->Drop(hdl); });
   s.set_fail_handler([](Hdl) {});
-  s.set_message_handler([this](Hdl hdl, Server::message_ptr msg) {
-    auto it = impl_->clients.find(hdl);
-    if (it == impl_->clients.end()) return;
-    websocketpp::lib::error_code ec;
-    auto reply_error = [&](const std::string& text) {
-      impl_->server.send(hdl, StatusJson(2, text), websocketpp::frame::opcode::text, ec);
-    };
-    if (msg->get_opcode() != websocketpp::frame::opcode::text) {
-      ++stats_.bad_requests;  // binary ops need capabilities this server does not advertise
-      reply_error("binary client messages are not supported (no clientPublish capability)");
-      return;
-    }
-    const ClientRequest r = ParseClientText(msg->get_payload());
-    if (r.kind == ClientRequest::kBad) {
-      ++stats_.bad_requests;
-      reply_error("ignored a bad request: " + r.error);
-      return;
-    }
-    if (r.kind == ClientRequest::kUnsupported) {
-      ++stats_.unsupported;
-      reply_error(r.error);
-      return;
-    }
-    auto& client = it->second;
-    if (r.kind == ClientRequest::kSubscribe) {
-      for (const auto& [sub, ch] : r.subscriptions) {
-        if (!impl_->channels.count(ch)) {
-          ++stats_.bad_requests;
-          reply_error("subscribe: unknown channel " + std::to_string(ch));
-          continue;
-        }
-        if (client.subs.count(sub)) {
-          ++stats_.bad_requests;
-          reply_error("subscribe: subscription id " + std::to_string(sub) + " is in use");
-          continue;
-        }
-        client.subs[sub] = ch;
-        bool first = false;
-        {
-          std::lock_guard<std::mutex> lock(wanted_mutex_);
-          first = wanted_[ch]++ == 0;
-        }
-        if (first && on_subscribed_) on_subscribed_(ch);
-      }
-    } else {
-      for (uint32_t sub : r.unsubscribe_ids) {
-        auto s2 = client.subs.find(sub);
-        if (s2 == client.subs.end()) {
-          ++stats_.bad_requests;
-          reply_error("unsubscribe: no subscription " + std::to_string(sub));
-          continue;
-        }
-        {
-          std::lock_guard<std::mutex> lock(wanted_mutex_);
-          --wanted_[s2->second];
-        }
-        client.subs.erase(s2);
-      }
-    }
-  });
-  websocketpp::lib::asio::error_code aec;
-  const auto address = websocketpp::lib::asio::ip::address::from_string(options_.address, aec);
-  if (aec) {
-    throw std::runtime_error("foxglove_bridge: address '" + options_.address +
-                             "' is not an IP address (e.g. 127.0.0.1 or 0.0.0.0)");
-  }
-  websocketpp::lib::error_code ec;
-  s.listen(websocketpp::lib::asio::ip::tcp::endpoint(address, static_cast<uint16_t>(options_.port)),
-           ec);
-  if (ec) {
-    throw std::runtime_error("foxglove_bridge: cannot listen on " + options_.address + ":" +
-                             std::to_string(options_.port) + ": " + ec.message() +
-                             " (set port:=N to another port, or port:=0 for any free one)");
-  }
-  const auto local = s.get_local_endpoint(aec);
-  port_ = aec ? options_.port : local.port();
+  s.set_message_handler([impl](Hdl hdl, Server::message_ptr msg) { impl->Message(hdl, msg); });
+  port_ = impl_->Listen(options_);
   s.start_accept();
   thread_ = std::thread([this] {
     try {
