@@ -175,71 +175,49 @@ nlohmann::json BenchPlay(const std::string& file) {
   return j;
 }
 
-nlohmann::json BenchBridge(const Frames& frames, int clients, double seconds,
-                           const std::string& out,
-                           std::shared_ptr<runtime::Publisher<msgs::RgbdFrame>> pub) {
-  const std::string port_file = out + "/bridge.port";
-  std::filesystem::remove(port_file);
-  Child bridge({g_bin + "/p2i_foxglove_bridge", "port:=0", "port_file:=" + port_file,
-                "foxglove:=false", "topics:=[/bench/live]", "max_queue_mb:=64"},
-               ChildOptions{"", out + "/bridge.log", -1});
+// The port the bridge wrote to port_file (0 if none within 10 s).
+int WaitForPort(const std::string& port_file) {
   int port = 0;
   for (int i = 0; i < 200 && port == 0; ++i) {
     std::ifstream in(port_file);
     in >> port;
     if (port == 0) std::this_thread::sleep_for(std::chrono::milliseconds(50));
   }
-  std::atomic<bool> stop{false};
-  std::vector<std::vector<double>> lat(clients);
-  std::vector<uint64_t> bytes(clients, 0);
-  std::vector<std::thread> threads;
-  std::atomic<int> subscribed{0};
-  for (int c = 0; c < clients; ++c) {
-    threads.emplace_back([&, c] {
-      testing::RawWs ws(port);
-      if (!ws.ok() || ws.Handshake("foxglove.websocket.v1").find(" 101 ") == std::string::npos) return;
-      uint32_t channel = 0;
-      ws.WaitText([&](const nlohmann::json& j) {
-        if (j["op"] != "advertise") return false;
-        for (const auto& ch : j["channels"])
-          if (ch["topic"] == "/bench/live") channel = ch["id"];
-        return channel != 0;
-      });
-      ws.SendFrame(1, nlohmann::json{{"op", "subscribe"},
-                                     {"subscriptions", {{{"id", 1}, {"channelId", channel}}}}}
-                          .dump());
-      ++subscribed;
-      uint8_t op;
-      std::string p;
-      while (!stop) {
-        if (!ws.ReadFrame(&op, &p, 200) || op != 2 || p.size() < 13) continue;
-        const int64_t now = runtime::NowNs();
-        msgs::pb::HeaderOnly ho;  // the recorded message starts with the header frame
-        if (ho.ParsePartialFromArray(p.data() + 13, static_cast<int>(p.size() - 13)))
-          lat[c].push_back((now - ho.header().publish_stamp_ns()) / 1e6);
-        bytes[c] += p.size();
-      }
-    });
-  }
-  // A direct ZeroMQ subscriber of the same topic (the baseline the bridge adds to).
-  runtime::SubscriberOptions so;
-  so.endpoints = {runtime::DefaultEndpoint("topic", "/bench/live")};
-  runtime::RawSubscriber direct("/bench/live", so);
-  std::vector<double> direct_ms;
-  // Received on a thread of its own as soon as it arrives (polling it from the publishing loop
-  // once per tick measured the tick, ~33 ms, not the transport).
-  std::thread direct_thread([&] {
-    msgs::WireMessage m;
-    msgs::pb::Header h;
-    while (!stop) {
-      if (direct.Receive(&m, &h, std::chrono::milliseconds(200)))
-        direct_ms.push_back((runtime::NowNs() - h.publish_stamp_ns()) / 1e6);
-    }
+  return port;
+}
+
+// One Foxglove client: subscribes to /bench/live, then records each message's publish-to-
+// receive latency and size until `stop`.
+void BridgeClient(int port, const std::atomic<bool>& stop, std::atomic<int>* subscribed,
+                  std::vector<double>* lat, uint64_t* bytes) {
+  testing::RawWs ws(port);
+  if (!ws.ok() || ws.Handshake("foxglove.websocket.v1").find(" 101 ") == std::string::npos) return;
+  uint32_t channel = 0;
+  ws.WaitText([&](const nlohmann::json& j) {
+    if (j["op"] != "advertise") return false;
+    for (const auto& ch : j["channels"])
+      if (ch["topic"] == "/bench/live") channel = ch["id"];
+    return channel != 0;
   });
-  const auto wait_until = Clock::now() + std::chrono::seconds(10);
-  while (subscribed < clients && Clock::now() < wait_until)
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  ws.SendFrame(1, nlohmann::json{{"op", "subscribe"},
+                                 {"subscriptions", {{{"id", 1}, {"channelId", channel}}}}}
+                      .dump());
+  ++*subscribed;
+  uint8_t op;
+  std::string p;
+  while (!stop) {
+    if (!ws.ReadFrame(&op, &p, 200) || op != 2 || p.size() < 13) continue;
+    const int64_t now = runtime::NowNs();
+    msgs::pb::HeaderOnly ho;  // the recorded message starts with the header frame
+    if (ho.ParsePartialFromArray(p.data() + 13, static_cast<int>(p.size() - 13)))
+      lat->push_back((now - ho.header().publish_stamp_ns()) / 1e6);
+    *bytes += p.size();
+  }
+}
+
+// The frames at 30 Hz for `seconds`; returns how many were published.
+uint64_t PublishAt30Hz(const Frames& frames, double seconds,
+                       const std::shared_ptr<runtime::Publisher<msgs::RgbdFrame>>& pub) {
   const auto start = Clock::now();
   auto next = start;
   uint64_t sent = 0;
@@ -250,11 +228,14 @@ nlohmann::json BenchBridge(const Frames& frames, int clients, double seconds,
     pub->Publish(frames.rgbd[tick++ % frames.rgbd.size()]);
     ++sent;
   }
-  std::this_thread::sleep_for(std::chrono::milliseconds(500));
-  stop = true;
-  for (auto& t : threads) t.join();
-  direct_thread.join();
-  bridge.Stop();
+  return sent;
+}
+
+// The bridge's figures against the direct ZeroMQ baseline, printed and as JSON.
+nlohmann::json BridgeSummary(int clients, double seconds, uint64_t sent,
+                             const std::vector<std::vector<double>>& lat,
+                             const std::vector<uint64_t>& bytes,
+                             const std::vector<double>& direct_ms) {
   std::vector<double> all;
   uint64_t total_bytes = 0, received = 0;
   for (int c = 0; c < clients; ++c) {
@@ -280,6 +261,50 @@ nlohmann::json BenchBridge(const Frames& frames, int clients, double seconds,
               Pct(all, 0.5), Pct(all, 0.99), d50, d99, Pct(all, 0.5) - d50,
               j["throughput_mib_s_total"].get<double>(), j["messages_per_s_per_client"].get<double>());
   return j;
+}
+
+nlohmann::json BenchBridge(const Frames& frames, int clients, double seconds,
+                           const std::string& out,
+                           std::shared_ptr<runtime::Publisher<msgs::RgbdFrame>> pub) {
+  const std::string port_file = out + "/bridge.port";
+  std::filesystem::remove(port_file);
+  Child bridge({g_bin + "/p2i_foxglove_bridge", "port:=0", "port_file:=" + port_file,
+                "foxglove:=false", "topics:=[/bench/live]", "max_queue_mb:=64"},
+               ChildOptions{"", out + "/bridge.log", -1});
+  const int port = WaitForPort(port_file);
+  std::atomic<bool> stop{false};
+  std::vector<std::vector<double>> lat(clients);
+  std::vector<uint64_t> bytes(clients, 0);
+  std::vector<std::thread> threads;
+  std::atomic<int> subscribed{0};
+  for (int c = 0; c < clients; ++c)
+    threads.emplace_back(BridgeClient, port, std::cref(stop), &subscribed, &lat[c], &bytes[c]);
+  // A direct ZeroMQ subscriber of the same topic (the baseline the bridge adds to).
+  runtime::SubscriberOptions so;
+  so.endpoints = {runtime::DefaultEndpoint("topic", "/bench/live")};
+  runtime::RawSubscriber direct("/bench/live", so);
+  std::vector<double> direct_ms;
+  // Received on a thread of its own as soon as it arrives (polling it from the publishing loop
+  // once per tick measured the tick, ~33 ms, not the transport).
+  std::thread direct_thread([&] {
+    msgs::WireMessage m;
+    msgs::pb::Header h;
+    while (!stop) {
+      if (direct.Receive(&m, &h, std::chrono::milliseconds(200)))
+        direct_ms.push_back((runtime::NowNs() - h.publish_stamp_ns()) / 1e6);
+    }
+  });
+  const auto wait_until = Clock::now() + std::chrono::seconds(10);
+  while (subscribed < clients && Clock::now() < wait_until)
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  const uint64_t sent = PublishAt30Hz(frames, seconds, pub);
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  stop = true;
+  for (auto& t : threads) t.join();
+  direct_thread.join();
+  bridge.Stop();
+  return BridgeSummary(clients, seconds, sent, lat, bytes, direct_ms);
 }
 
 }  // namespace
