@@ -29,6 +29,82 @@ std::string Absolute(const std::string& name) {
   return name.empty() || name[0] == '/' ? name : "/" + name;
 }
 
+// The services of the discovered graph (warnings for unreachable places on stderr).
+std::vector<runtime::RegistryEntry> DiscoverServices(const std::vector<std::string>& peers,
+                                                     const char* what) {
+  std::vector<runtime::RegistryEntry> services;
+  std::vector<std::string> errors;
+  for (auto& e : runtime::DiscoverGraph(peers, std::chrono::milliseconds(1000), &errors))
+    if (e.kind == "service") services.push_back(std::move(e));
+  for (const auto& e : errors) std::fprintf(stderr, "%s: warning: %s\n", what, e.c_str());
+  return services;
+}
+
+int PrintServices(const std::vector<runtime::RegistryEntry>& services, bool types,
+                  const std::vector<std::string>& peers) {
+  std::vector<std::string> printed;
+  for (const auto& e : services) {
+    const std::string line = types ? e.name + " [" + e.type + "]" : e.name;
+    if (std::find(printed.begin(), printed.end(), line) != printed.end()) continue;
+    printed.push_back(line);
+    std::printf("%s\n", line.c_str());
+  }
+  if (services.empty()) {
+    std::fprintf(stderr, "p2i service list: no services in %s (is a graph running?)\n",
+                 runtime::DiscoveryPlaces(peers).c_str());
+  }
+  return 0;
+}
+
+// The endpoint to call `name` at: the first reachable registered server ("" = its default
+// endpoint). Throws std::invalid_argument when the service takes another request type.
+std::string FindServer(const std::vector<runtime::RegistryEntry>& services, const std::string& name,
+                       const std::string& type, const std::vector<std::string>& peers,
+                       const char* what) {
+  for (const auto& e : services) {
+    if (e.name != name) continue;
+    if (e.type != type)
+      throw std::invalid_argument("service " + name + " takes " + e.type + ", not " + type);
+  }
+  // Local servers first, then the peers' tcp endpoints (remote ipc paths are unreachable).
+  const auto endpoints = runtime::ReachableEndpoints(services, "service", name);
+  if (endpoints.size() > 1) {
+    std::fprintf(stderr, "%s: warning: %zu servers of %s; calling the first (--endpoint picks "
+                         "one):", what, endpoints.size(), name.c_str());
+    for (const auto& ep : endpoints) std::fprintf(stderr, " %s", ep.c_str());
+    std::fprintf(stderr, "\n");
+  }
+  if (!endpoints.empty()) return endpoints.front();
+  std::fprintf(stderr,
+               "%s: warning: no server of %s registered in %s; trying its default endpoint\n",
+               what, name.c_str(), runtime::DiscoveryPlaces(peers).c_str());
+  return "";
+}
+
+// One call of `name` with the request `value` of type t; prints the reply.
+int CallService(const std::string& name, msgs::pb::MsgType t, const std::string& value,
+                const std::string& endpoint, double timeout_s) {
+  runtime::ServiceClientOptions o;
+  o.endpoint = endpoint;
+  o.timeout = std::chrono::milliseconds(static_cast<int64_t>(timeout_s * 1000));
+  o.retries = 0;
+  runtime::RawServiceClient client(name, o);
+  auto msg = MessageFromText(t, value, "/p2i_service_call_" + std::to_string(::getpid()));
+  StampHeader(msg.get(), client.NextRequestId(), client.NextRequestId());
+  msgs::WireMessage request;
+  request.header = msg->SerializeAsString();
+  msgs::WireMessage reply;
+  std::string error;
+  std::printf("requester: making request to %s (%s)\n", name.c_str(), client.Endpoint().c_str());
+  if (!client.Call(request, &reply, &error)) {
+    std::fprintf(stderr, "p2i service call: %s\n", error.c_str());
+    return 1;
+  }
+  std::string text = msgs::DebugString(reply);
+  std::printf("response:\n%s", text.c_str());
+  return 0;
+}
+
 int RunService(const std::vector<std::string>& args) {
   CLI::App app{"Services of the running graph (like `ros2 service`), found as `p2i topic list` "
                "finds topics: $P2I_RUN_DIR/registry, else every running launch of this user, and "
@@ -63,69 +139,12 @@ int RunService(const std::vector<std::string>& args) {
   runtime::Shutdown::InstallSignalHandlers();
   const char* what = list->parsed() ? "p2i service list" : "p2i service call";
   std::vector<runtime::RegistryEntry> services;
-  if (list->parsed() || endpoint.empty()) {
-    std::vector<std::string> errors;
-    for (auto& e : runtime::DiscoverGraph(peers, std::chrono::milliseconds(1000), &errors))
-      if (e.kind == "service") services.push_back(std::move(e));
-    for (const auto& e : errors) std::fprintf(stderr, "%s: warning: %s\n", what, e.c_str());
-  }
-  if (list->parsed()) {
-    std::vector<std::string> printed;
-    for (const auto& e : services) {
-      const std::string line = types ? e.name + " [" + e.type + "]" : e.name;
-      if (std::find(printed.begin(), printed.end(), line) != printed.end()) continue;
-      printed.push_back(line);
-      std::printf("%s\n", line.c_str());
-    }
-    if (services.empty()) {
-      std::fprintf(stderr, "p2i service list: no services in %s (is a graph running?)\n",
-                   runtime::DiscoveryPlaces(peers).c_str());
-    }
-    return 0;
-  }
+  if (list->parsed() || endpoint.empty()) services = DiscoverServices(peers, what);
+  if (list->parsed()) return PrintServices(services, types, peers);
   name = Absolute(name);
   const msgs::pb::MsgType t = MsgTypeFromName(type);
-  if (endpoint.empty()) {
-    for (const auto& e : services) {
-      if (e.name != name) continue;
-      if (e.type != type)
-        throw std::invalid_argument("service " + name + " takes " + e.type + ", not " + type);
-    }
-    // Local servers first, then the peers' tcp endpoints (remote ipc paths are unreachable).
-    const auto endpoints = runtime::ReachableEndpoints(services, "service", name);
-    if (endpoints.size() > 1) {
-      std::fprintf(stderr, "%s: warning: %zu servers of %s; calling the first (--endpoint picks "
-                           "one):", what, endpoints.size(), name.c_str());
-      for (const auto& ep : endpoints) std::fprintf(stderr, " %s", ep.c_str());
-      std::fprintf(stderr, "\n");
-    }
-    if (!endpoints.empty()) {
-      endpoint = endpoints.front();
-    } else {
-      std::fprintf(stderr,
-                   "%s: warning: no server of %s registered in %s; trying its default endpoint\n",
-                   what, name.c_str(), runtime::DiscoveryPlaces(peers).c_str());
-    }
-  }
-  runtime::ServiceClientOptions o;
-  o.endpoint = endpoint;
-  o.timeout = std::chrono::milliseconds(static_cast<int64_t>(timeout_s * 1000));
-  o.retries = 0;
-  runtime::RawServiceClient client(name, o);
-  auto msg = MessageFromText(t, value, "/p2i_service_call_" + std::to_string(::getpid()));
-  StampHeader(msg.get(), client.NextRequestId(), client.NextRequestId());
-  msgs::WireMessage request;
-  request.header = msg->SerializeAsString();
-  msgs::WireMessage reply;
-  std::string error;
-  std::printf("requester: making request to %s (%s)\n", name.c_str(), client.Endpoint().c_str());
-  if (!client.Call(request, &reply, &error)) {
-    std::fprintf(stderr, "p2i service call: %s\n", error.c_str());
-    return 1;
-  }
-  std::string text = msgs::DebugString(reply);
-  std::printf("response:\n%s", text.c_str());
-  return 0;
+  if (endpoint.empty()) endpoint = FindServer(services, name, type, peers, what);
+  return CallService(name, t, value, endpoint, timeout_s);
 }
 
 }  // namespace
