@@ -96,60 +96,29 @@ NodeParams Find(const std::string& node) {
                                              : " (running:" + names + ")"));
 }
 
-int RunParam(const std::vector<std::string>& args) {
-  CLI::App app{"Parameters of running nodes (like `ros2 param`): the nodes of $P2I_RUN_DIR, else "
-               "of every running launch of this user (this host only).",
-               "p2i param"};
-  app.require_subcommand(1);
-  std::string node, name, value;
-  bool describe = false;
-  auto* list = app.add_subcommand("list", "List the parameters of one node or of every node");
-  list->add_option("node", node, "Full node name, e.g. /pose_source");
-  list->add_flag("-d,--describe", describe, "Also print type, default, dynamic, description");
-  auto* get = app.add_subcommand("get", "Print a parameter's value");
-  get->add_option("node", node, "Full node name")->required();
-  get->add_option("name", name, "Parameter name")->required();
-  auto* set = app.add_subcommand("set", "Set a dynamic parameter of a running node");
-  set->add_option("node", node, "Full node name")->required();
-  set->add_option("name", name, "Parameter name")->required();
-  set->add_option("value", value, "New value (YAML)")->required();
-  std::vector<std::string> rest(args.rbegin(), args.rend() - 1);
-  try {
-    app.parse(rest);
-  } catch (const CLI::ParseError& e) {
-    return CliExit(app, e);
-  }
-  if (list->parsed()) {
-    std::vector<NodeParams> nodes = node.empty() ? Running() : std::vector<NodeParams>{Find(node)};
-    if (nodes.empty())
-      std::fprintf(stderr, "p2i param list: no running nodes in %s\n", Places().c_str());
-    for (const auto& n : nodes) {
-      std::printf("%s:\n", n.node.c_str());
-      for (const auto& kv : n.params) {
-        const YAML::Node p = kv.second;
-        if (!describe) {
-          std::printf("  %s\n", kv.first.as<std::string>().c_str());
-          continue;
-        }
-        std::printf("  %s (%s, default %s%s): %s\n", kv.first.as<std::string>().c_str(),
-                    p["type"].as<std::string>().c_str(), p["default"].as<std::string>().c_str(),
-                    p["dynamic"].as<bool>() ? ", dynamic" : "",
-                    p["description"].as<std::string>().c_str());
+int ListParams(const std::string& node, bool describe) {
+  std::vector<NodeParams> nodes = node.empty() ? Running() : std::vector<NodeParams>{Find(node)};
+  if (nodes.empty()) std::fprintf(stderr, "p2i param list: no running nodes in %s\n", Places().c_str());
+  for (const auto& n : nodes) {
+    std::printf("%s:\n", n.node.c_str());
+    for (const auto& kv : n.params) {
+      const YAML::Node p = kv.second;
+      if (!describe) {
+        std::printf("  %s\n", kv.first.as<std::string>().c_str());
+        continue;
       }
+      std::printf("  %s (%s, default %s%s): %s\n", kv.first.as<std::string>().c_str(),
+                  p["type"].as<std::string>().c_str(), p["default"].as<std::string>().c_str(),
+                  p["dynamic"].as<bool>() ? ", dynamic" : "",
+                  p["description"].as<std::string>().c_str());
     }
-    return 0;
   }
-  const NodeParams n = Find(node);
-  if (!n.params[name]) {
-    std::string names;
-    for (const auto& kv : n.params) names += " " + kv.first.as<std::string>();
-    throw std::invalid_argument("node " + n.node + " has no parameter '" + name +
-                                "' (its parameters:" + names + ")");
-  }
-  if (get->parsed()) {
-    std::printf("%s\n", n.params[name]["value"].as<std::string>().c_str());
-    return 0;
-  }
+  return 0;
+}
+
+// Asks the node to set a dynamic parameter (NODE.set, written atomically) and waits up to 5 s
+// for its NODE.result.
+int SetParam(const NodeParams& n, const std::string& name, const std::string& value) {
   if (!n.params[name]["dynamic"].as<bool>()) {
     std::fprintf(stderr, "p2i param set: parameter '%s' of %s is not dynamic (read at start-up "
                          "only: restart the node with %s:=VALUE)\n",
@@ -184,6 +153,44 @@ int RunParam(const std::vector<std::string>& args) {
   }
   std::fprintf(stderr, "p2i param set: %s did not answer within 5 s\n", n.node.c_str());
   return 1;
+}
+
+int RunParam(const std::vector<std::string>& args) {
+  CLI::App app{"Parameters of running nodes (like `ros2 param`): the nodes of $P2I_RUN_DIR, else "
+               "of every running launch of this user (this host only).",
+               "p2i param"};
+  app.require_subcommand(1);
+  std::string node, name, value;
+  bool describe = false;
+  auto* list = app.add_subcommand("list", "List the parameters of one node or of every node");
+  list->add_option("node", node, "Full node name, e.g. /pose_source");
+  list->add_flag("-d,--describe", describe, "Also print type, default, dynamic, description");
+  auto* get = app.add_subcommand("get", "Print a parameter's value");
+  get->add_option("node", node, "Full node name")->required();
+  get->add_option("name", name, "Parameter name")->required();
+  auto* set = app.add_subcommand("set", "Set a dynamic parameter of a running node");
+  set->add_option("node", node, "Full node name")->required();
+  set->add_option("name", name, "Parameter name")->required();
+  set->add_option("value", value, "New value (YAML)")->required();
+  std::vector<std::string> rest(args.rbegin(), args.rend() - 1);
+  try {
+    app.parse(rest);
+  } catch (const CLI::ParseError& e) {
+    return CliExit(app, e);
+  }
+  if (list->parsed()) return ListParams(node, describe);
+  const NodeParams n = Find(node);
+  if (!n.params[name]) {
+    std::string names;
+    for (const auto& kv : n.params) names += " " + kv.first.as<std::string>();
+    throw std::invalid_argument("node " + n.node + " has no parameter '" + name +
+                                "' (its parameters:" + names + ")");
+  }
+  if (get->parsed()) {
+    std::printf("%s\n", n.params[name]["value"].as<std::string>().c_str());
+    return 0;
+  }
+  return SetParam(n, name, value);
 }
 
 }  // namespace
