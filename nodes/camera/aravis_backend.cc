@@ -281,9 +281,8 @@ struct DepthImage {
 
 class AravisBackend : public LiveBackend {
  public:
+  // Options checked by CameraOptions::Validate (buffers >= 2, depth_scale > 0).
   explicit AravisBackend(const AravisOptions& o) : options_(o) {
-    if (o.buffers < 2) throw std::runtime_error("aravis: buffers must be >= 2");
-    if (!(o.depth_scale > 0.0)) throw std::runtime_error("aravis: depth_scale must be > 0");
     color_ = std::make_unique<Device>(o.device, "device");
     color_->Configure(o.pixel_format, o.width, o.height, o.frame_rate, o.exposure_us);
     if (!o.depth_device.empty()) {

@@ -121,18 +121,21 @@ void ValidateReplay(const ReplaySourceOptions& o) {
   CheckOption(o.rate_scale > 0.0, "camera", "rate_scale", o.rate_scale, "be > 0",
               "rate_scale:=1 plays at the recorded speed");
   CheckSize(o.width, o.height);
-  if ((o.width > 0) != (o.height > 0)) {
-    throw std::invalid_argument("camera: width and height must both be > 0 or both 0 (got " +
-                                std::to_string(o.width) + "x" + std::to_string(o.height) +
-                                "); set both (centre-crop + resize) or neither (native size)");
-  }
+  runtime::CheckSizePair("camera", o.width, o.height,
+                         "set both (centre-crop + resize) or neither (native size)");
 }
 
 void ValidateLive(const std::string& backend, const LiveSourceOptions& o) {
   if (backend == "aravis") {
     CheckSize(o.aravis.width, o.aravis.height);
+    CheckOption(o.aravis.buffers >= 2, "camera", "buffers", o.aravis.buffers, "be >= 2",
+                "stream buffers per device, e.g. buffers:=8");
+    CheckOption(o.aravis.depth_scale > 0.0, "camera", "depth_scale", o.aravis.depth_scale,
+                "be > 0", "metres per depth unit, e.g. depth_scale:=0.001");
   } else {
     CheckSize(o.libcamera.width, o.libcamera.height);
+    CheckOption(o.libcamera.buffers >= 2, "camera", "buffers", o.libcamera.buffers, "be >= 2",
+                "e.g. buffers:=4");
   }
   CheckOption(o.pose_mode == "topic" || o.pose_mode == "none", "camera", "pose_mode", o.pose_mode,
               "be topic or none", "pose_mode:=none publishes frames without a pose");

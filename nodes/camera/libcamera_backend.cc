@@ -34,8 +34,8 @@ int RgbLayout(const lc::PixelFormat& f, int* code) {
 
 class LibcameraBackend : public LiveBackend {
  public:
+  // Options checked by CameraOptions::Validate (buffers >= 2).
   explicit LibcameraBackend(const LibcameraOptions& o) {
-    if (o.buffers < 2) throw std::runtime_error("libcamera: buffers must be >= 2");
     manager_ = std::make_unique<lc::CameraManager>();
     if (manager_->start() != 0) {
       throw std::runtime_error("libcamera: cannot start the camera manager");

@@ -36,4 +36,13 @@ void CheckOption(bool ok, const std::string& node, const std::string& name, cons
                               ShowOptionValue(value) + "); " + fix);
 }
 
+/// A size given in full or not at all: unless width and height are both > 0 or both 0, throws
+/// std::invalid_argument("NODE: width and height must both be > 0 or both 0 (got WxH); FIX").
+/// Check each side's range first (CheckOption): this rule says nothing of negative values.
+inline void CheckSizePair(const std::string& node, int width, int height, const std::string& fix) {
+  if ((width > 0) == (height > 0)) return;
+  throw std::invalid_argument(node + ": width and height must both be > 0 or both 0 (got " +
+                              std::to_string(width) + "x" + std::to_string(height) + "); " + fix);
+}
+
 }  // namespace p2i::runtime

@@ -6,6 +6,8 @@
 #include <map>
 #include <stdexcept>
 
+#include "nodes/runtime/option_error.h"
+
 namespace p2i::slam_sink {
 
 SlamSinkOptions SlamSinkOptions::FromYaml(const YAML::Node& node, const std::string& source) {
@@ -61,10 +63,9 @@ SlamSinkOptions SlamSinkOptions::FromYaml(const YAML::Node& node, const std::str
 void SlamSinkOptions::Validate() const {
   writer.Validate();
   checker.Validate();
-  if (policy != "flag" && policy != "drop") {
-    throw std::invalid_argument("SlamSinkOptions: policy must be 'flag' or 'drop', got '" +
-                                policy + "'");
-  }
+  runtime::CheckOption(policy == "flag" || policy == "drop", "slam_sink", "policy", policy,
+                       "be flag or drop",
+                       "policy:=flag writes failing frames, marked; policy:=drop does not write them");
 }
 
 }  // namespace p2i::slam_sink

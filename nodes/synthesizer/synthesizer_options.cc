@@ -51,10 +51,8 @@ void SynthesizerOptions::Validate() const {
               "1 = every frame of the dataset");
   CheckOption(loader.threads >= 1, "synthesizer", "threads", loader.threads, "be >= 1",
               "e.g. threads:=1");
-  if ((width == 0) != (height == 0)) {
-    throw std::invalid_argument("synthesizer: width and height must both be > 0 or both 0 (got " +
-                                std::to_string(width) + "x" + std::to_string(height) + ")");
-  }
+  runtime::CheckSizePair("synthesizer", width, height,
+                         "set both (resize the training data) or neither (the dataset's own size)");
 }
 
 bool SynthesizerOptions::Learned() const {

@@ -70,7 +70,8 @@ TEST_CASE("CameraOptions::Validate refuses each bad value, naming parameter and 
       {{{"backend", "replay"}, {"dataset", "d"}, {"rate_scale", "0"}},
        "rate_scale must be > 0 (got 0)"},
       {{{"backend", "replay"}, {"dataset", "d"}, {"width", "320"}},
-       "width and height must both be > 0 or both 0 (got 320x0)"},
+       "width and height must both be > 0 or both 0 (got 320x0); set both (centre-crop + "
+       "resize) or neither (native size)"},
       {{{"backend", "replay"}, {"dataset", "d"}, {"width", "9000"}, {"height", "10"}},
        "width must be in [0, 8192] (got 9000)"},
       {{{"backend", "aravis"}, {"width", "-5"}}, "width must be in [0, 8192] (got -5)"},
@@ -81,11 +82,15 @@ TEST_CASE("CameraOptions::Validate refuses each bad value, naming parameter and 
        "pose_tolerance must be >= 0 (got -0.5)"},
       {{{"backend", "libcamera"}, {"pose_wait", "-1"}}, "pose_wait must be >= 0 (got -1)"},
       {{{"backend", "aravis"}, {"max_pending", "0"}}, "max_pending must be >= 1 (got 0)"},
+      {{{"backend", "aravis"}, {"buffers", "1"}}, "buffers must be >= 2 (got 1)"},
+      {{{"backend", "aravis"}, {"depth_scale", "0"}}, "depth_scale must be > 0 (got 0)"},
+      {{{"backend", "libcamera"}, {"buffers", "1"}}, "buffers must be >= 2 (got 1)"},
   });
   // The good neighbours of the refused values pass.
   CHECK(ValidationError<CameraOptions>({{"backend", "replay"}, {"dataset", "d"}, {"width", "320"}, {"height", "240"}})
             .empty());
   CHECK(ValidationError<CameraOptions>({{"backend", "aravis"}, {"pose_mode", "none"}, {"max_pending", "1"}}).empty());
+  CHECK(ValidationError<CameraOptions>({{"backend", "aravis"}, {"buffers", "2"}, {"depth_scale", "1e-4"}}).empty());
   CHECK(ValidationError<CameraOptions>({{"pose_mode", "trajectory"}, {"width", "8192"}}).empty());
 }
 

@@ -150,7 +150,8 @@ TEST_CASE("SlamSinkOptions parse YAML and name unknown keys", "[unit]") {
                     Catch::Contains("polcy") && Catch::Contains("test.yaml"));
   CHECK_THROWS_WITH(SlamSinkOptions::FromYaml(YAML::Load("{out_dir: /tmp/x, policy: keep}"),
                                               "test.yaml"),
-                    Catch::Contains("policy"));
+                    "slam_sink: policy must be flag or drop (got 'keep'); policy:=flag writes "
+                    "failing frames, marked; policy:=drop does not write them");
 }
 
 }  // namespace
