@@ -286,79 +286,10 @@ class Reader {
       }
     }
     node.node_namespace = body["namespace"] ? Namespace(body, "namespace", scope, ns, "node") : ns;
-
-    if (body["param"]) {
-      const YAML::Node params = body["param"];
-      if (!params.IsSequence()) {
-        Fail(file, params, "param", "must be a list of {name, value} or {from: FILE}");
-      }
-      for (const auto& p : params) {
-        LaunchParam param;
-        param.source = Where(file, p);
-        if (p.IsMap() && p["from"]) {
-          CheckKeys(p, file, "param", {"from"});
-          std::string path = Text(p, "from", scope, "param", true);
-          if (fs::path(path).is_relative()) path = (fs::path(Dirname(file)) / path).string();
-          param.from_file = AbsolutePath(path);
-          if (!fs::is_regular_file(param.from_file)) {
-            Fail(file, p["from"], "from", "parameter file '" + param.from_file + "' does not exist");
-          }
-        } else {
-          CheckKeys(p, file, "param", {"name", "value"});
-          param.name = Text(p, "name", scope, "param", true);
-          if (!IsIdentifier(param.name, true)) {
-            Fail(file, p["name"], "name", "'" + param.name + "' is not a parameter name");
-          }
-          if (!p["value"]) Fail(file, p, "value", "parameter '" + param.name + "' has no value");
-          param.value_yaml = EmitFlow(SubstituteNode(p["value"], scope, "value"));
-        }
-        node.params.push_back(std::move(param));
-      }
-    }
-    if (body["remap"]) {
-      const YAML::Node remaps = body["remap"];
-      if (!remaps.IsSequence()) Fail(file, remaps, "remap", "must be a list of {from, to}");
-      for (const auto& r : remaps) {
-        CheckKeys(r, file, "remap", {"from", "to"});
-        const std::string from = Text(r, "from", scope, "remap", false);
-        const std::string to = Text(r, "to", scope, "remap", false);
-        node.remaps.emplace_back(from, to);
-      }
-    }
-    if (body["args"]) {
-      const std::string args = Text(body, "args", scope, "node", true);
-      try {
-        node.args = SplitShellWords(args);
-      } catch (const std::invalid_argument& e) {
-        Fail(file, body["args"], "args", e.what());
-      }
-    }
-    if (body["machine"]) node.machine = Text(body, "machine", scope, "node", false);
-    if (body["respawn"]) node.respawn = Bool(body, "respawn", scope);
-    if (body["required"]) node.required = Bool(body, "required", scope);
-    if (body["respawn_delay"]) {
-      const std::string text = Text(body, "respawn_delay", scope, "node", false);
-      char* end = nullptr;
-      node.respawn_delay = std::strtod(text.c_str(), &end);
-      if (end == text.c_str() || *end != '\0' || !std::isfinite(node.respawn_delay) ||
-          node.respawn_delay < 0) {
-        Fail(file, body["respawn_delay"], "respawn_delay",
-             "'" + text + "' must be a number of seconds >= 0");
-      }
-    }
-    if (body["output"]) {
-      node.output = Text(body, "output", scope, "node", false);
-      if (node.output != "screen" && node.output != "log" && node.output != "both") {
-        Fail(file, body["output"], "output", "'" + node.output + "' must be screen, log or both");
-      }
-    }
-    if (node.respawn && node.required) {
-      Fail(file, body, "required",
-           "a node cannot be both `respawn` and `required` (required stops the launch when it "
-           "exits; respawn restarts it)");
-    }
-    const std::string full =
-        JoinNamespace(node.node_namespace, node.DisplayName());
+    if (body["param"]) ReadParams(body["param"], scope, &node);
+    if (body["remap"]) ReadRemaps(body["remap"], scope, &node);
+    ReadProcessOptions(body, scope, &node);
+    const std::string full = JoinNamespace(node.node_namespace, node.DisplayName());
     const auto [it, inserted] = node_sources_.emplace(full, node.source);
     if (!inserted) {
       Fail(file, body, "name",
@@ -366,6 +297,85 @@ class Reader {
                "); give each node a distinct `name:` or `namespace:`");
     }
     out_.nodes.push_back(std::move(node));
+  }
+
+  // A node's `param:` list: {name, value} entries and {from: FILE} parameter files.
+  void ReadParams(const YAML::Node& params, const SubstitutionScope& scope, NodeDescription* node) {
+    const std::string& file = scope.file;
+    if (!params.IsSequence()) {
+      Fail(file, params, "param", "must be a list of {name, value} or {from: FILE}");
+    }
+    for (const auto& p : params) {
+      LaunchParam param;
+      param.source = Where(file, p);
+      if (p.IsMap() && p["from"]) {
+        CheckKeys(p, file, "param", {"from"});
+        std::string path = Text(p, "from", scope, "param", true);
+        if (fs::path(path).is_relative()) path = (fs::path(Dirname(file)) / path).string();
+        param.from_file = AbsolutePath(path);
+        if (!fs::is_regular_file(param.from_file)) {
+          Fail(file, p["from"], "from", "parameter file '" + param.from_file + "' does not exist");
+        }
+      } else {
+        CheckKeys(p, file, "param", {"name", "value"});
+        param.name = Text(p, "name", scope, "param", true);
+        if (!IsIdentifier(param.name, true)) {
+          Fail(file, p["name"], "name", "'" + param.name + "' is not a parameter name");
+        }
+        if (!p["value"]) Fail(file, p, "value", "parameter '" + param.name + "' has no value");
+        param.value_yaml = EmitFlow(SubstituteNode(p["value"], scope, "value"));
+      }
+      node->params.push_back(std::move(param));
+    }
+  }
+
+  void ReadRemaps(const YAML::Node& remaps, const SubstitutionScope& scope, NodeDescription* node) {
+    const std::string& file = scope.file;
+    if (!remaps.IsSequence()) Fail(file, remaps, "remap", "must be a list of {from, to}");
+    for (const auto& r : remaps) {
+      CheckKeys(r, file, "remap", {"from", "to"});
+      const std::string from = Text(r, "from", scope, "remap", false);
+      const std::string to = Text(r, "to", scope, "remap", false);
+      node->remaps.emplace_back(from, to);
+    }
+  }
+
+  // How the node's process runs: args, machine, respawn (+ delay), required, output.
+  void ReadProcessOptions(const YAML::Node& body, const SubstitutionScope& scope,
+                          NodeDescription* node) {
+    const std::string& file = scope.file;
+    if (body["args"]) {
+      const std::string args = Text(body, "args", scope, "node", true);
+      try {
+        node->args = SplitShellWords(args);
+      } catch (const std::invalid_argument& e) {
+        Fail(file, body["args"], "args", e.what());
+      }
+    }
+    if (body["machine"]) node->machine = Text(body, "machine", scope, "node", false);
+    if (body["respawn"]) node->respawn = Bool(body, "respawn", scope);
+    if (body["required"]) node->required = Bool(body, "required", scope);
+    if (body["respawn_delay"]) {
+      const std::string text = Text(body, "respawn_delay", scope, "node", false);
+      char* end = nullptr;
+      node->respawn_delay = std::strtod(text.c_str(), &end);
+      if (end == text.c_str() || *end != '\0' || !std::isfinite(node->respawn_delay) ||
+          node->respawn_delay < 0) {
+        Fail(file, body["respawn_delay"], "respawn_delay",
+             "'" + text + "' must be a number of seconds >= 0");
+      }
+    }
+    if (body["output"]) {
+      node->output = Text(body, "output", scope, "node", false);
+      if (node->output != "screen" && node->output != "log" && node->output != "both") {
+        Fail(file, body["output"], "output", "'" + node->output + "' must be screen, log or both");
+      }
+    }
+    if (node->respawn && node->required) {
+      Fail(file, body, "required",
+           "a node cannot be both `respawn` and `required` (required stops the launch when it "
+           "exits; respawn restarts it)");
+    }
   }
 
   void ReadMachine(const YAML::Node& body, const YAML::Node& key, const SubstitutionScope& scope) {
