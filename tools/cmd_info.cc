@@ -38,59 +38,39 @@ std::string Stamp(uint64_t ns) {
   return out;
 }
 
-int RunInfo(const std::vector<std::string>& args) {
-  CLI::App app{"Summarise an MCAP recording (like `ros2 bag info`)", "p2i info"};
-  std::string path;
-  bool json = false;
-  app.add_option("file", path, "FILE.mcap")->required();
-  app.add_flag("--json", json, "Machine-readable output (times in ns as strings)");
-  std::vector<std::string> rest(args.rbegin(), args.rend() - 1);
-  try {
-    app.parse(rest);
-  } catch (const CLI::ParseError& e) {
-    return CliExit(app, e);
-  }
-  recording::McapReader reader;
-  std::string error;
-  if (!reader.Open(path, &error)) {
-    std::fprintf(stderr, "p2i info: %s\n", error.c_str());
-    return 1;
-  }
-  const auto& s = reader.Summary();
+// --json: the summary with times in ns as strings.
+void PrintJson(const std::string& path, const recording::McapSummary& s, double duration) {
   const auto& st = s.stats;
-  const double duration =
-      st.message_count ? (st.message_end_time - st.message_start_time) / 1e9 : 0.0;
-  std::string compression;
-  for (const auto& [name, n] : s.chunks_by_compression)
-    compression += (compression.empty() ? "" : ", ") + std::to_string(n) + " " +
-                   (name.empty() ? "uncompressed" : name);
-  if (json) {
-    nlohmann::json j = {{"file", path},
-                        {"size", s.file_size},
-                        {"duration_s", duration},
-                        {"start_ns", std::to_string(st.message_start_time)},
-                        {"end_ns", std::to_string(st.message_end_time)},
-                        {"messages", st.message_count},
-                        {"chunks", st.chunk_count},
-                        {"compressed_bytes", s.compressed_bytes},
-                        {"uncompressed_bytes", s.uncompressed_bytes},
-                        {"has_summary", s.has_summary},
-                        {"stop_reason", s.stop_reason},
-                        {"readable_bytes", s.readable_bytes},
-                        {"topics", nlohmann::json::array()}};
-    for (const auto& [id, ch] : s.channels) {
-      const auto sc = s.schemas.find(ch.schema_id);
-      const auto cnt = st.channel_message_counts.find(id);
-      const uint64_t n = cnt == st.channel_message_counts.end() ? 0 : cnt->second;
-      j["topics"].push_back({{"topic", ch.topic},
-                             {"type", sc == s.schemas.end() ? "" : sc->second.name},
-                             {"count", n},
-                             {"rate_hz", duration > 0 && n > 1 ? (n - 1) / duration : 0.0},
-                             {"encoding", ch.message_encoding}});
-    }
-    std::printf("%s\n", j.dump(2).c_str());
-    return 0;
+  nlohmann::json j = {{"file", path},
+                      {"size", s.file_size},
+                      {"duration_s", duration},
+                      {"start_ns", std::to_string(st.message_start_time)},
+                      {"end_ns", std::to_string(st.message_end_time)},
+                      {"messages", st.message_count},
+                      {"chunks", st.chunk_count},
+                      {"compressed_bytes", s.compressed_bytes},
+                      {"uncompressed_bytes", s.uncompressed_bytes},
+                      {"has_summary", s.has_summary},
+                      {"stop_reason", s.stop_reason},
+                      {"readable_bytes", s.readable_bytes},
+                      {"topics", nlohmann::json::array()}};
+  for (const auto& [id, ch] : s.channels) {
+    const auto sc = s.schemas.find(ch.schema_id);
+    const auto cnt = st.channel_message_counts.find(id);
+    const uint64_t n = cnt == st.channel_message_counts.end() ? 0 : cnt->second;
+    j["topics"].push_back({{"topic", ch.topic},
+                           {"type", sc == s.schemas.end() ? "" : sc->second.name},
+                           {"count", n},
+                           {"rate_hz", duration > 0 && n > 1 ? (n - 1) / duration : 0.0},
+                           {"encoding", ch.message_encoding}});
   }
+  std::printf("%s\n", j.dump(2).c_str());
+}
+
+// The `ros2 bag info` layout.
+void PrintText(const std::string& path, const recording::McapSummary& s, double duration,
+               const std::string& compression) {
+  const auto& st = s.stats;
   std::printf("Files:             %s\n", path.c_str());
   std::printf("Bag size:          %s\n", Bytes(s.file_size).c_str());
   std::printf("Storage id:        mcap (library \"%s\"%s)\n", s.library.c_str(),
@@ -126,6 +106,39 @@ int RunInfo(const std::vector<std::string>& args) {
     first = false;
   }
   if (first) std::printf("\n");
+}
+
+int RunInfo(const std::vector<std::string>& args) {
+  CLI::App app{"Summarise an MCAP recording (like `ros2 bag info`)", "p2i info"};
+  std::string path;
+  bool json = false;
+  app.add_option("file", path, "FILE.mcap")->required();
+  app.add_flag("--json", json, "Machine-readable output (times in ns as strings)");
+  std::vector<std::string> rest(args.rbegin(), args.rend() - 1);
+  try {
+    app.parse(rest);
+  } catch (const CLI::ParseError& e) {
+    return CliExit(app, e);
+  }
+  recording::McapReader reader;
+  std::string error;
+  if (!reader.Open(path, &error)) {
+    std::fprintf(stderr, "p2i info: %s\n", error.c_str());
+    return 1;
+  }
+  const auto& s = reader.Summary();
+  const auto& st = s.stats;
+  const double duration =
+      st.message_count ? (st.message_end_time - st.message_start_time) / 1e9 : 0.0;
+  std::string compression;
+  for (const auto& [name, n] : s.chunks_by_compression)
+    compression += (compression.empty() ? "" : ", ") + std::to_string(n) + " " +
+                   (name.empty() ? "uncompressed" : name);
+  if (json) {
+    PrintJson(path, s, duration);
+  } else {
+    PrintText(path, s, duration, compression);
+  }
   return 0;
 }
 
