@@ -323,6 +323,7 @@ int DelayOrBw(bool delay, const std::string& topic, const std::vector<std::strin
   return all.empty() ? 1 : 0;
 }
 
+// long-function: one flat CLI11 table of the subcommands and their options, then the dispatch
 int RunTopic(const std::vector<std::string>& args) {
   CLI::App app{"Inspect topics of running nodes (like `ros2 topic`). Topics are discovered "
                "from $P2I_RUN_DIR/registry, else from every running launch of this user, and "

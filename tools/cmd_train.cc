@@ -61,6 +61,54 @@ int Train(const model::P2iConfig& config, const scene::RgbdDataset& train,
   return 0;
 }
 
+// The training and validation frames.
+struct TrainVal {
+  scene::RgbdDataset train, val;
+};
+
+// Without a split: every holdout_every-th frame (the middle one of each block) validates.
+TrainVal HoldOut(const scene::RgbdDataset& all, int holdout_every) {
+  TrainVal out;
+  out.train.camera = out.val.camera = all.camera;
+  for (size_t i = 0; i < all.frames.size(); ++i)
+    (holdout_every > 0 && i % holdout_every == static_cast<size_t>(holdout_every / 2) ? out.val
+                                                                                      : out.train)
+        .frames.push_back(all.frames[i]);
+  return out;
+}
+
+// --data (builtin:NAME, procedural or a dataset folder) split by --split or --holdout-every.
+TrainVal LoadTrainVal(const model::P2iConfig& config, const std::string& data,
+                      const std::string& split_file, int frames, int holdout_every) {
+  scene::RgbdDataset all;
+  if (scene::IsBuiltinSpec(data)) {
+    scene::BuiltinDatasetOptions o;
+    o.width = o.height = std::max(128, config.resolution);
+    o.max_frames = frames;
+    std::fprintf(stderr, "rendering up to %d frames of %s along the default arm sweep at %dx%d...\n",
+                 frames, data.c_str(), o.width, o.height);
+    all = scene::RenderBuiltinDataset(data, o);
+  } else if (data == "procedural") {
+    all = model::MakeProceduralDataset(frames, std::max(64, config.resolution));
+  } else {
+    const scene::DatasetIndex index = scene::OpenDataset(data);
+    if (!split_file.empty()) {
+      const scene::Split split = scene::Split::FromYamlFile(split_file);
+      std::fprintf(stderr, "loading %zu training and %zu held-out frames of %s...\n",
+                   split.train.size(), split.test.size(), data.c_str());
+      TrainVal out;
+      out.train = index.SelectIds(split.train).LoadAll();
+      out.val = index.SelectIds(split.test).LoadAll();
+      return out;
+    }
+    std::fprintf(stderr, "loading %zu frames of %s...\n", index.size(), data.c_str());
+    all = index.LoadAll();
+  }
+  if (!split_file.empty() && all.frames.size() > 0)
+    throw std::runtime_error("--split needs --data DIR (a dataset folder)");
+  return HoldOut(all, holdout_every);
+}
+
 int RunTrain(const std::vector<std::string>& args) {
   CLI::App app{"Train P2I-NET (phase 1: G+D adversarial, phase 2: ENET) or the CNN baseline.\n"
                "Writes DIR/checkpoint.pt (atomic) and DIR/train_log.jsonl. Ctrl-C or SIGTERM "
@@ -113,37 +161,9 @@ int RunTrain(const std::vector<std::string>& args) {
     return CliExit(app, e);
   }
   const model::P2iConfig config = model::P2iConfig::FromYamlFile(config_path);
-  scene::RgbdDataset all;
-  if (scene::IsBuiltinSpec(data)) {
-    scene::BuiltinDatasetOptions o;
-    o.width = o.height = std::max(128, config.resolution);
-    o.max_frames = frames;
-    std::fprintf(stderr, "rendering up to %d frames of %s along the default arm sweep at %dx%d...\n",
-                 frames, data.c_str(), o.width, o.height);
-    all = scene::RenderBuiltinDataset(data, o);
-  } else if (data == "procedural") {
-    all = model::MakeProceduralDataset(frames, std::max(64, config.resolution));
-  } else {
-    const scene::DatasetIndex index = scene::OpenDataset(data);
-    if (!split_file.empty()) {
-      const scene::Split split = scene::Split::FromYamlFile(split_file);
-      std::fprintf(stderr, "loading %zu training and %zu held-out frames of %s...\n",
-                   split.train.size(), split.test.size(), data.c_str());
-      scene::RgbdDataset train = index.SelectIds(split.train).LoadAll();
-      scene::RgbdDataset val = index.SelectIds(split.test).LoadAll();
-      return Train(config, train, val, out_dir, phase, steps, threads, resume, quiet, init_from);
-    }
-    std::fprintf(stderr, "loading %zu frames of %s...\n", index.size(), data.c_str());
-    all = index.LoadAll();
-  }
-  if (!split_file.empty() && all.frames.size() > 0)
-    throw std::runtime_error("--split needs --data DIR (a dataset folder)");
-  scene::RgbdDataset train, val;
-  train.camera = val.camera = all.camera;
-  for (size_t i = 0; i < all.frames.size(); ++i)
-    (holdout_every > 0 && i % holdout_every == static_cast<size_t>(holdout_every / 2) ? val : train)
-        .frames.push_back(all.frames[i]);
-  return Train(config, train, val, out_dir, phase, steps, threads, resume, quiet, init_from);
+  const TrainVal data_split = LoadTrainVal(config, data, split_file, frames, holdout_every);
+  return Train(config, data_split.train, data_split.val, out_dir, phase, steps, threads, resume,
+               quiet, init_from);
 }
 
 P2I_COMMAND("train", "Train P2I-NET or the CNN baseline from a config preset", RunTrain);
