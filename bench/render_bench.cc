@@ -37,6 +37,48 @@ p2i::scene::CameraInfo MakeCamera(int w, int h) {
   return p2i::scene::CameraInfo::Pinhole(w, h, f, f, (w - 1) / 2.0, (h - 1) / 2.0);
 }
 
+// The first frame of a size as PNG (RGB, depth in mm) for a look at what was timed.
+void DumpFrame(const std::string& dump_dir, int w, int h, const p2i::scene::RgbdSample& sample) {
+  const std::string stem = dump_dir + "/" + std::to_string(w) + "x" + std::to_string(h);
+  cv::Mat bgr, depth_mm;
+  cv::cvtColor(sample.rgb, bgr, cv::COLOR_RGB2BGR);
+  sample.depth.convertTo(depth_mm, CV_16U, 1000.0);
+  cv::imwrite(stem + "_rgb.png", bgr);
+  cv::imwrite(stem + "_depth_mm.png", depth_mm);
+}
+
+// `frames` renders at w x h along the trajectory: the printed line and the CSV row.
+void BenchSize(const p2i::scene::SimScene& scene,
+               const std::vector<p2i::scene::StampedPose>& trajectory, const std::string& scene_name,
+               int w, int h, int frames, const std::string& dump_dir, std::ofstream& csv) {
+  const auto camera = MakeCamera(w, h);
+  std::vector<double> ms, cpu_ms;
+  double checksum = 0;
+  for (int f = 0; f < frames; ++f) {
+    const std::size_t index = (f * 7) % trajectory.size();
+    const double c0 = ThreadCpuMs();
+    const auto t0 = std::chrono::steady_clock::now();
+    // Along the trajectory: with --realistic the motion blur of the sweep's own motion.
+    const auto sample = scene.RenderOnTrajectory(trajectory, index, camera);
+    const auto t1 = std::chrono::steady_clock::now();
+    cpu_ms.push_back(ThreadCpuMs() - c0);
+    checksum += sample.depth.at<float>(h / 2, w / 2);
+    if (f == 0 && !dump_dir.empty()) DumpFrame(dump_dir, w, h, sample);
+    ms.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
+  }
+  double mean = 0;
+  for (double m : ms) mean += m;
+  mean /= ms.size();
+  std::nth_element(ms.begin(), ms.begin() + ms.size() / 2, ms.end());
+  const double median = ms[ms.size() / 2];
+  std::nth_element(cpu_ms.begin(), cpu_ms.begin() + cpu_ms.size() / 2, cpu_ms.end());
+  const double cpu_median = cpu_ms[cpu_ms.size() / 2];
+  std::printf("%4dx%-5d %10.2f %10.2f %10.1f %10.2f %10.1f   (checksum %.3f)\n", w, h, median,
+              mean, 1000.0 / median, cpu_median, 1000.0 / cpu_median, checksum);
+  csv << scene_name << "," << w << "," << h << "," << frames << "," << median << "," << mean
+      << "," << 1000.0 / median << "," << cpu_median << "," << 1000.0 / cpu_median << "\n";
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -81,43 +123,8 @@ int main(int argc, char** argv) {
     std::printf("%10s %10s %10s %10s %10s %10s\n", "size", "median_ms", "mean_ms", "fps", "cpu_ms",
                 "cpu_fps");
     const int sizes[][2] = {{640, 480}, {256, 256}, {128, 128}};
-    for (const auto& s : sizes) {
-      const auto camera = MakeCamera(s[0], s[1]);
-      std::vector<double> ms, cpu_ms;
-      double checksum = 0;
-      for (int f = 0; f < frames; ++f) {
-        const std::size_t index = (f * 7) % trajectory.size();
-        const double c0 = ThreadCpuMs();
-        const auto t0 = std::chrono::steady_clock::now();
-        // Along the trajectory: with --realistic the motion blur of the sweep's own motion.
-        const auto sample = scene.RenderOnTrajectory(trajectory, index, camera);
-        const auto t1 = std::chrono::steady_clock::now();
-        cpu_ms.push_back(ThreadCpuMs() - c0);
-        checksum += sample.depth.at<float>(s[1] / 2, s[0] / 2);
-        if (f == 0 && !dump_dir.empty()) {
-          const std::string stem =
-              dump_dir + "/" + std::to_string(s[0]) + "x" + std::to_string(s[1]);
-          cv::Mat bgr, depth_mm;
-          cv::cvtColor(sample.rgb, bgr, cv::COLOR_RGB2BGR);
-          sample.depth.convertTo(depth_mm, CV_16U, 1000.0);
-          cv::imwrite(stem + "_rgb.png", bgr);
-          cv::imwrite(stem + "_depth_mm.png", depth_mm);
-        }
-        ms.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
-      }
-      double mean = 0;
-      for (double m : ms) mean += m;
-      mean /= ms.size();
-      std::nth_element(ms.begin(), ms.begin() + ms.size() / 2, ms.end());
-      const double median = ms[ms.size() / 2];
-      std::nth_element(cpu_ms.begin(), cpu_ms.begin() + cpu_ms.size() / 2, cpu_ms.end());
-      const double cpu_median = cpu_ms[cpu_ms.size() / 2];
-      std::printf("%4dx%-5d %10.2f %10.2f %10.1f %10.2f %10.1f   (checksum %.3f)\n", s[0], s[1],
-                  median, mean, 1000.0 / median, cpu_median, 1000.0 / cpu_median, checksum);
-      csv << scene_name << "," << s[0] << "," << s[1] << "," << frames << "," << median << ","
-          << mean << "," << 1000.0 / median << "," << cpu_median << "," << 1000.0 / cpu_median
-          << "\n";
-    }
+    for (const auto& s : sizes)
+      BenchSize(scene, trajectory, scene_name, s[0], s[1], frames, dump_dir, csv);
     std::printf("wrote %s\n", csv_path.c_str());
   } catch (const std::exception& e) {
     std::cerr << "render_bench: " << e.what() << "\n";
