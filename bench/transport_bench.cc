@@ -58,6 +58,73 @@ msgs::RgbdFrame MakeFrame(int w, int h) {
   return f;
 }
 
+// What the subscriber of PubSub measured.
+struct Received {
+  std::vector<double> latencies_ms;
+  int received = 0;
+  uint64_t dropped = 0, malformed = 0;
+  Clock::time_point t_first, t_last;
+};
+
+// PubSub's subscriber thread: sets `ready` at the first message, measures the `frames` frames
+// from seq `first_seq` on (earlier ones are warm-up), reports gaps and losses on stderr.
+void ReceiveFrames(const std::string& transport, const std::string& topic,
+                   const std::string& endpoint, int frames, std::atomic<bool>* ready,
+                   const std::atomic<bool>& done, const std::atomic<uint64_t>& first_seq,
+                   Received* out) {
+  runtime::SubscriberOptions so;
+  so.endpoints = {endpoint};
+  runtime::RawSubscriber sub(topic, so);
+  out->latencies_ms.reserve(frames);
+  uint64_t measured_from = 0, expected_seq = 0;
+  auto last_rx = Clock::now();
+  while (true) {
+    msgs::WireMessage m;
+    msgs::pb::Header h;
+    if (!sub.Receive(&m, &h, std::chrono::milliseconds(50))) {
+      if (done && Clock::now() - last_rx > std::chrono::milliseconds(500)) break;
+      continue;
+    }
+    last_rx = Clock::now();
+    *ready = true;
+    msgs::RgbdFrame f;
+    std::string err;
+    if (!msgs::Decode(m, &f, &err)) {
+      ++out->malformed;
+      continue;
+    }
+    const uint64_t fs = first_seq.load();
+    if (fs == 0 || h.seq() < fs) continue;  // warm-up
+    if (measured_from == 0) {
+      measured_from = h.seq();
+      out->t_first = last_rx;
+    }
+    out->t_last = last_rx;
+    ++out->received;
+    if (h.seq() != expected_seq && expected_seq != 0) {
+      std::fprintf(stderr, "  [%s] gap: expected seq %llu, got %llu\n", transport.c_str(),
+                   static_cast<unsigned long long>(expected_seq),
+                   static_cast<unsigned long long>(h.seq()));
+    }
+    expected_seq = h.seq() + 1;
+    out->latencies_ms.push_back((runtime::NowNs() - h.publish_stamp_ns()) * 1e-6);
+    if (h.seq() == fs + frames - 1) break;
+  }
+  if (out->received < frames && expected_seq != 0 &&
+      expected_seq <= first_seq.load() + frames - 1) {
+    std::fprintf(stderr, "  [%s] stopped waiting at seq %llu of %llu\n", transport.c_str(),
+                 static_cast<unsigned long long>(expected_seq),
+                 static_cast<unsigned long long>(first_seq.load() + frames - 1));
+  }
+  if (measured_from > first_seq.load()) {
+    std::fprintf(stderr, "  [%s] first measured frame lost: got %llu first, expected %llu\n",
+                 transport.c_str(), static_cast<unsigned long long>(measured_from),
+                 static_cast<unsigned long long>(first_seq.load()));
+  }
+  out->dropped = frames - out->received;
+  out->malformed += sub.Stats().malformed.load();
+}
+
 Row PubSub(const std::string& transport, const std::string& endpoint, int frames,
            double target_hz) {
   const std::string topic = "/bench/rgbd";
@@ -68,62 +135,9 @@ Row PubSub(const std::string& transport, const std::string& endpoint, int frames
 
   std::atomic<bool> sub_ready{false}, done{false};
   std::atomic<uint64_t> first_seq{0};
-  std::vector<double> latencies_ms;
-  int received = 0;
-  uint64_t dropped = 0, malformed = 0;
-  Clock::time_point t_first, t_last;
-  std::thread sub_thread([&] {
-    runtime::SubscriberOptions so;
-    so.endpoints = {raw->Endpoint()};
-    runtime::RawSubscriber sub(topic, so);
-    latencies_ms.reserve(frames);
-    uint64_t measured_from = 0, expected_seq = 0;
-    auto last_rx = Clock::now();
-    while (true) {
-      msgs::WireMessage m;
-      msgs::pb::Header h;
-      if (!sub.Receive(&m, &h, std::chrono::milliseconds(50))) {
-        if (done && Clock::now() - last_rx > std::chrono::milliseconds(500)) break;
-        continue;
-      }
-      last_rx = Clock::now();
-      sub_ready = true;
-      msgs::RgbdFrame f;
-      std::string err;
-      if (!msgs::Decode(m, &f, &err)) {
-        ++malformed;
-        continue;
-      }
-      const uint64_t fs = first_seq.load();
-      if (fs == 0 || h.seq() < fs) continue;  // warm-up
-      if (measured_from == 0) {
-        measured_from = h.seq();
-        t_first = last_rx;
-      }
-      t_last = last_rx;
-      ++received;
-      if (h.seq() != expected_seq && expected_seq != 0) {
-        std::fprintf(stderr, "  [%s] gap: expected seq %llu, got %llu\n", transport.c_str(),
-                     static_cast<unsigned long long>(expected_seq),
-                     static_cast<unsigned long long>(h.seq()));
-      }
-      expected_seq = h.seq() + 1;
-      latencies_ms.push_back((runtime::NowNs() - h.publish_stamp_ns()) * 1e-6);
-      if (h.seq() == fs + frames - 1) break;
-    }
-    if (received < frames && expected_seq != 0 && expected_seq <= first_seq.load() + frames - 1) {
-      std::fprintf(stderr, "  [%s] stopped waiting at seq %llu of %llu\n", transport.c_str(),
-                   static_cast<unsigned long long>(expected_seq),
-                   static_cast<unsigned long long>(first_seq.load() + frames - 1));
-    }
-    if (measured_from > first_seq.load()) {
-      std::fprintf(stderr, "  [%s] first measured frame lost: got %llu first, expected %llu\n",
-                   transport.c_str(), static_cast<unsigned long long>(measured_from),
-                   static_cast<unsigned long long>(first_seq.load()));
-    }
-    dropped = frames - received;
-    malformed += sub.Stats().malformed.load();
-  });
+  Received rx;
+  std::thread sub_thread(ReceiveFrames, std::cref(transport), std::cref(topic), raw->Endpoint(),
+                         frames, &sub_ready, std::cref(done), std::cref(first_seq), &rx);
 
   msgs::RgbdFrame frame = MakeFrame(640, 480);
   // Warm up until the subscriber is connected (slow joiner), then measure.
@@ -150,14 +164,14 @@ Row PubSub(const std::string& transport, const std::string& endpoint, int frames
   r.transport = transport;
   r.target_hz = target_hz;
   r.sent = frames;
-  r.received = received;
-  r.dropped = dropped;
-  r.malformed = malformed;
-  const double span = std::chrono::duration<double>(t_last - t_first).count();
-  r.rate = received > 1 && span > 0 ? (received - 1) / span : 0;
-  r.p50_ms = Percentile(latencies_ms, 0.50);
-  r.p99_ms = Percentile(latencies_ms, 0.99);
-  r.max_ms = Percentile(latencies_ms, 1.0);
+  r.received = rx.received;
+  r.dropped = rx.dropped;
+  r.malformed = rx.malformed;
+  const double span = std::chrono::duration<double>(rx.t_last - rx.t_first).count();
+  r.rate = rx.received > 1 && span > 0 ? (rx.received - 1) / span : 0;
+  r.p50_ms = Percentile(rx.latencies_ms, 0.50);
+  r.p99_ms = Percentile(rx.latencies_ms, 0.99);
+  r.max_ms = Percentile(rx.latencies_ms, 1.0);
   r.mb_per_s = r.rate * (640 * 480 * 5) / 1e6;
   return r;
 }
