@@ -34,6 +34,8 @@ uint32_t ChannelOf(const json& advertise, const std::string& topic) {
 
 }  // namespace
 
+// long-function: one scenario on one bridge: each step (subscribe, bad requests, slow client,
+// unsubscribe) starts from the state the previous one left
 TEST_CASE("p2i_foxglove_bridge: advertise, subscribe, bad requests, slow client, unsubscribe",
           "[integration]") {
   runtime::Shutdown::ResetForTesting();
