@@ -125,91 +125,15 @@ class Device {
   /// Applies the settings; throws naming the device, the setting and what it accepts.
   void Configure(const std::string& pixel_format, int width, int height, double frame_rate,
                  double exposure_us) {
+    SetPixelFormat(pixel_format);
+    SetSize(width, height);
     GError* error = nullptr;
-    if (!pixel_format.empty()) {
-      if (!ParsePixelFormat(pixel_format)) {
-        throw std::runtime_error(Name() + ": pixel_format '" + pixel_format +
-                                 "' cannot be converted by p2i (supported: " +
-                                 SupportedPixelFormats() + ")");
-      }
-      guint n = 0;
-      const char** formats =
-          arv_camera_dup_available_pixel_formats_as_strings(camera_, &n, &error);
-      std::string offered;
-      bool found = false;
-      for (guint i = 0; formats != nullptr && i < n; ++i) {
-        offered += (offered.empty() ? "" : ", ") + std::string(formats[i]);
-        found = found || pixel_format == formats[i];
-      }
-      g_free(formats);
-      g_clear_error(&error);
-      if (!found) {
-        throw std::runtime_error(Name() + " does not offer pixel format '" + pixel_format +
-                                 "' (it offers: " + (offered.empty() ? "?" : offered) + ")");
-      }
-      arv_camera_set_pixel_format_from_string(camera_, pixel_format.c_str(), &error);
-      Check(&error, "setting PixelFormat to " + pixel_format);
-    }
-    if (width > 0 || height > 0) {
-      gint min_w = 0, max_w = 0, min_h = 0, max_h = 0;
-      arv_camera_get_width_bounds(camera_, &min_w, &max_w, &error);
-      Check(&error, "reading the Width bounds");
-      arv_camera_get_height_bounds(camera_, &min_h, &max_h, &error);
-      Check(&error, "reading the Height bounds");
-      gint x = 0, y = 0, w = 0, h = 0;
-      arv_camera_get_region(camera_, &x, &y, &w, &h, &error);
-      Check(&error, "reading the region");
-      if (width > 0) w = width;
-      if (height > 0) h = height;
-      if (w < min_w || w > max_w || h < min_h || h > max_h) {
-        throw std::runtime_error(Name() + ": size " + std::to_string(w) + "x" +
-                                 std::to_string(h) + " is outside the device's range " +
-                                 std::to_string(min_w) + ".." + std::to_string(max_w) + " x " +
-                                 std::to_string(min_h) + ".." + std::to_string(max_h));
-      }
-      arv_camera_set_region(camera_, 0, 0, w, h, &error);
-      Check(&error, "setting the size to " + std::to_string(w) + "x" + std::to_string(h));
-    }
     if (arv_camera_is_feature_available(camera_, "AcquisitionMode", nullptr)) {
       arv_camera_set_acquisition_mode(camera_, ARV_ACQUISITION_MODE_CONTINUOUS, &error);
       Check(&error, "setting AcquisitionMode to Continuous");
     }
-    if (frame_rate > 0.0) {
-      if (!arv_camera_is_frame_rate_available(camera_, nullptr)) {
-        throw std::runtime_error(Name() + " has no frame rate control (AcquisitionFrameRate); "
-                                 "use frame_rate:=0 to keep its own rate");
-      }
-      double lo = 0.0, hi = 0.0;
-      arv_camera_get_frame_rate_bounds(camera_, &lo, &hi, &error);
-      Check(&error, "reading the frame rate bounds");
-      if (frame_rate < lo || frame_rate > hi) {
-        throw std::runtime_error(Name() + ": frame_rate " + std::to_string(frame_rate) +
-                                 " Hz is outside the device's range " + std::to_string(lo) +
-                                 ".." + std::to_string(hi) + " Hz");
-      }
-      arv_camera_set_frame_rate(camera_, frame_rate, &error);
-      Check(&error, "setting the frame rate");
-    }
-    if (exposure_us > 0.0) {
-      if (!arv_camera_is_exposure_time_available(camera_, nullptr)) {
-        throw std::runtime_error(Name() + " has no exposure time control (ExposureTime); "
-                                 "use exposure_us:=0 to keep its own exposure");
-      }
-      if (arv_camera_is_exposure_auto_available(camera_, nullptr)) {
-        arv_camera_set_exposure_time_auto(camera_, ARV_AUTO_OFF, &error);
-        Check(&error, "switching ExposureAuto off");
-      }
-      double lo = 0.0, hi = 0.0;
-      arv_camera_get_exposure_time_bounds(camera_, &lo, &hi, &error);
-      Check(&error, "reading the exposure bounds");
-      if (exposure_us < lo || exposure_us > hi) {
-        throw std::runtime_error(Name() + ": exposure_us " + std::to_string(exposure_us) +
-                                 " is outside the device's range " + std::to_string(lo) + ".." +
-                                 std::to_string(hi) + " us");
-      }
-      arv_camera_set_exposure_time(camera_, exposure_us, &error);
-      Check(&error, "setting the exposure time");
-    }
+    SetFrameRate(frame_rate);
+    SetExposure(exposure_us);
     if (arv_camera_is_gv_device(camera_)) {
       arv_camera_gv_auto_packet_size(camera_, &error);  // best effort; the default also works
       g_clear_error(&error);
@@ -261,6 +185,102 @@ class Device {
   static void OnControlLost(ArvDevice*, gpointer self) {
     static_cast<Device*>(self)->lost_.store(true);
   }
+  // pixel_format (empty = keep): one p2i converts and the device offers.
+  void SetPixelFormat(const std::string& pixel_format) {
+    if (pixel_format.empty()) return;
+    GError* error = nullptr;
+    if (!ParsePixelFormat(pixel_format)) {
+      throw std::runtime_error(Name() + ": pixel_format '" + pixel_format +
+                               "' cannot be converted by p2i (supported: " +
+                               SupportedPixelFormats() + ")");
+    }
+    guint n = 0;
+    const char** formats =
+        arv_camera_dup_available_pixel_formats_as_strings(camera_, &n, &error);
+    std::string offered;
+    bool found = false;
+    for (guint i = 0; formats != nullptr && i < n; ++i) {
+      offered += (offered.empty() ? "" : ", ") + std::string(formats[i]);
+      found = found || pixel_format == formats[i];
+    }
+    g_free(formats);
+    g_clear_error(&error);
+    if (!found) {
+      throw std::runtime_error(Name() + " does not offer pixel format '" + pixel_format +
+                               "' (it offers: " + (offered.empty() ? "?" : offered) + ")");
+    }
+    arv_camera_set_pixel_format_from_string(camera_, pixel_format.c_str(), &error);
+    Check(&error, "setting PixelFormat to " + pixel_format);
+  }
+
+  // The region's size (0 = keep that side), within the device's bounds.
+  void SetSize(int width, int height) {
+    if (!(width > 0 || height > 0)) return;
+    GError* error = nullptr;
+    gint min_w = 0, max_w = 0, min_h = 0, max_h = 0;
+    arv_camera_get_width_bounds(camera_, &min_w, &max_w, &error);
+    Check(&error, "reading the Width bounds");
+    arv_camera_get_height_bounds(camera_, &min_h, &max_h, &error);
+    Check(&error, "reading the Height bounds");
+    gint x = 0, y = 0, w = 0, h = 0;
+    arv_camera_get_region(camera_, &x, &y, &w, &h, &error);
+    Check(&error, "reading the region");
+    if (width > 0) w = width;
+    if (height > 0) h = height;
+    if (w < min_w || w > max_w || h < min_h || h > max_h) {
+      throw std::runtime_error(Name() + ": size " + std::to_string(w) + "x" +
+                               std::to_string(h) + " is outside the device's range " +
+                               std::to_string(min_w) + ".." + std::to_string(max_w) + " x " +
+                               std::to_string(min_h) + ".." + std::to_string(max_h));
+    }
+    arv_camera_set_region(camera_, 0, 0, w, h, &error);
+    Check(&error, "setting the size to " + std::to_string(w) + "x" + std::to_string(h));
+  }
+
+  // frame_rate (0 = keep the device's), within its bounds.
+  void SetFrameRate(double frame_rate) {
+    if (!(frame_rate > 0.0)) return;
+    GError* error = nullptr;
+    if (!arv_camera_is_frame_rate_available(camera_, nullptr)) {
+      throw std::runtime_error(Name() + " has no frame rate control (AcquisitionFrameRate); "
+                               "use frame_rate:=0 to keep its own rate");
+    }
+    double lo = 0.0, hi = 0.0;
+    arv_camera_get_frame_rate_bounds(camera_, &lo, &hi, &error);
+    Check(&error, "reading the frame rate bounds");
+    if (frame_rate < lo || frame_rate > hi) {
+      throw std::runtime_error(Name() + ": frame_rate " + std::to_string(frame_rate) +
+                               " Hz is outside the device's range " + std::to_string(lo) +
+                               ".." + std::to_string(hi) + " Hz");
+    }
+    arv_camera_set_frame_rate(camera_, frame_rate, &error);
+    Check(&error, "setting the frame rate");
+  }
+
+  // exposure_us (0 = keep the device's), auto exposure off, within its bounds.
+  void SetExposure(double exposure_us) {
+    if (!(exposure_us > 0.0)) return;
+    GError* error = nullptr;
+    if (!arv_camera_is_exposure_time_available(camera_, nullptr)) {
+      throw std::runtime_error(Name() + " has no exposure time control (ExposureTime); "
+                               "use exposure_us:=0 to keep its own exposure");
+    }
+    if (arv_camera_is_exposure_auto_available(camera_, nullptr)) {
+      arv_camera_set_exposure_time_auto(camera_, ARV_AUTO_OFF, &error);
+      Check(&error, "switching ExposureAuto off");
+    }
+    double lo = 0.0, hi = 0.0;
+    arv_camera_get_exposure_time_bounds(camera_, &lo, &hi, &error);
+    Check(&error, "reading the exposure bounds");
+    if (exposure_us < lo || exposure_us > hi) {
+      throw std::runtime_error(Name() + ": exposure_us " + std::to_string(exposure_us) +
+                               " is outside the device's range " + std::to_string(lo) + ".." +
+                               std::to_string(hi) + " us");
+    }
+    arv_camera_set_exposure_time(camera_, exposure_us, &error);
+    Check(&error, "setting the exposure time");
+  }
+
   void Check(GError** error, const std::string& what) {
     if (*error != nullptr) throw std::runtime_error(Name() + ": " + what + ": " + Take(error));
   }
