@@ -44,6 +44,10 @@ class DataParallel {
   bool Any(bool flag);
   /// Throws std::runtime_error unless every rank passes the same `value` (e.g. resume steps).
   void Agree(int64_t value, const std::string& what);
+  /// The smallest `value` over the ranks (`what` names it in a lost-contact error).
+  int64_t Min(int64_t value, const std::string& what);
+  /// Rank 0's `bytes` on every rank (its size first, then the bytes; `what` as for Min).
+  std::string BroadcastBytes(const std::string& bytes, const std::string& what);
 
   /// Bytes all-reduced per AverageGradients call (last call) and the time spent in them.
   int64_t LastAllReduceBytes() const { return last_bytes_; }

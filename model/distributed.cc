@@ -36,6 +36,12 @@ bool SplitHostPort(const std::string& s, std::string* host, int* port) {
 
 }  // namespace
 
+bool IsHostPort(const std::string& s) {
+  std::string host;
+  int port = 0;
+  return SplitHostPort(s, &host, &port);
+}
+
 void DistributedOptions::Validate() const {
   if (world_size < 1) throw std::invalid_argument("--world-size must be >= 1");
   if (rank < 0 || rank >= world_size)
@@ -108,7 +114,8 @@ void DataParallel::Lost(const std::string& during, const std::exception& e) cons
                            " lost contact with the other ranks during " + during +
                            " (a rank died, was stopped, or the network failed; timeout " +
                            std::to_string(options_.timeout_s) + " s). Rank 0's last checkpoint "
-                           "is intact: restart every rank with --resume. Cause: " + e.what());
+                           "is intact: restart every rank with --resume (p2i train; trainer "
+                           "nodes resume from it by themselves). Cause: " + e.what());
 }
 
 void DataParallel::Broadcast(const std::vector<torch::Tensor>& tensors) {
@@ -205,6 +212,56 @@ void DataParallel::Agree(int64_t value, const std::string& what) {
                              ", the ranks range " + std::to_string(lo.item<double>()) + ".." +
                              std::to_string(hi.item<double>()) +
                              "): give every rank the same checkpoint (rank 0's) and config");
+}
+
+int64_t DataParallel::Min(int64_t value, const std::string& what) {
+  torch::Tensor t = torch::tensor({value}, torch::kLong);
+  try {
+    std::vector<at::Tensor> one{t};
+    c10d::AllreduceOptions o;
+    o.reduceOp = c10d::ReduceOp::MIN;
+    impl_->group->allreduce(one, o)->wait();
+  } catch (const std::exception& e) {
+    Lost(what, e);
+  }
+  return t.item<int64_t>();
+}
+
+std::string DataParallel::BroadcastBytes(const std::string& bytes, const std::string& what) {
+  try {
+    torch::Tensor size = torch::tensor({static_cast<int64_t>(bytes.size())}, torch::kLong);
+    std::vector<at::Tensor> one{size};
+    impl_->group->broadcast(one)->wait();
+    const int64_t n = size.item<int64_t>();
+    if (n == 0) return std::string();
+    torch::Tensor data = IsWriter() ? torch::from_blob(const_cast<char*>(bytes.data()), {n},
+                                                       torch::kUInt8).clone()
+                                    : torch::empty({n}, torch::kUInt8);
+    std::vector<at::Tensor> payload{data};
+    impl_->group->broadcast(payload)->wait();
+    return std::string(reinterpret_cast<const char*>(data.data_ptr<uint8_t>()),
+                       static_cast<size_t>(n));
+  } catch (const std::exception& e) {
+    Lost(what, e);
+  }
+}
+
+namespace {
+
+DataParallel& GroupOf(const DistributedOptions& options) {
+  if (!options.Enabled())
+    throw std::logic_error("data-parallel collective called with world_size 1");
+  return *DataParallel::For(options);
+}
+
+}  // namespace
+
+int64_t MinOverRanks(const DistributedOptions& options, int64_t value) {
+  return GroupOf(options).Min(value, "the agreement on the round's frames");
+}
+
+std::string BroadcastFromRankZero(const DistributedOptions& options, const std::string& bytes) {
+  return GroupOf(options).BroadcastBytes(bytes, "the broadcast of rank 0's checkpoint");
 }
 
 void DataParallel::WriteStats(const std::string& dir) const {
