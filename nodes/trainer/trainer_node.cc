@@ -20,6 +20,7 @@ TrainerNode::TrainerNode(const runtime::NodeArgs& args) : Node("trainer", args) 
   options.Validate();  // std::invalid_argument: RunNode's configuration error, exit 2
   shutdown_wait_s_ = options.shutdown_wait;
   ParametersDone();
+  SetRank(options.loop.distributed);
 
   model::P2iConfig config = options.config_file.empty()
                                 ? model::P2iConfig()
@@ -54,7 +55,8 @@ TrainerNode::TrainerNode(const runtime::NodeArgs& args) : Node("trainer", args) 
   const std::string& dataset = options.dataset;
   if (!dataset.empty()) {
     const scene::DatasetIndex index = scene::OpenDataset(dataset);
-    for (size_t i = 0; i < index.size(); ++i) buffer_->Add(index.Load(i), index.camera());
+    for (size_t i = 0; i < index.size(); ++i)
+      if (ranks_.Keeps(i)) buffer_->Add(index.Load(i), index.camera());
     Log().info("offline: {} frames from {} (buffer holds {})", index.size(), dataset,
                buffer_->Size());
   } else {
@@ -92,8 +94,23 @@ TrainerNode::TrainerNode(const runtime::NodeArgs& args) : Node("trainer", args) 
 
 TrainerNode::~TrainerNode() = default;
 
+void TrainerNode::SetRank(const model::DistributedOptions& distributed) {
+  ranks_ = RankSync(distributed);
+  SetValue("world_size", ranks_.WorldSize());
+  SetValue("rank", ranks_.Rank());
+  if (ranks_.Enabled())
+    Log().info("data-parallel rank {} of {} (master {}): frames with seq % {} == {}, {}",
+               ranks_.Rank(), ranks_.WorldSize(), distributed.master, ranks_.WorldSize(),
+               ranks_.Rank(),
+               ranks_.IsWriter() ? "publishes the versions" : "publishes no versions");
+}
+
 void TrainerNode::OnFrame(const msgs::RgbdFrame& frame) {
   Count("frames_received");
+  if (!ranks_.Keeps(frame.meta.header().seq())) {
+    Count("frames_other_rank");
+    return;
+  }
   if (!frame.meta.has_camera_info()) {
     Count("frames_without_camera_info");
     WarnThrottled("no_camera_info", "dropping a frame without inline camera_info");

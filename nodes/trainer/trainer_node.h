@@ -7,6 +7,7 @@
 #include <memory>
 
 #include "nodes/runtime/node.h"
+#include "nodes/trainer/rank_sync.h"
 #include "nodes/trainer/replay_buffer.h"
 #include "nodes/trainer/training_loop.h"
 
@@ -17,7 +18,9 @@ namespace p2i::trainer {
 /// are converted and added to the buffer on the executor thread; ModelVersion ("model_version",
 /// latched) and TrainerStatus ("trainer_status") are published from the training thread through
 /// the runtime's locking publishers, and TrainerStatus also every `trainer_status_period` s from
-/// a timer. Thread-safety: as runtime::Node.
+/// a timer. Data-parallel (world_size > 1): the node keeps only its rank's shard of the frames
+/// (RankSync::Keeps; the others are counted as `frames_other_rank`) and only rank 0 publishes
+/// ModelVersions (TrainingLoop). Thread-safety: as runtime::Node.
 class TrainerNode : public runtime::Node {
  public:
   explicit TrainerNode(const runtime::NodeArgs& args);
@@ -28,8 +31,11 @@ class TrainerNode : public runtime::Node {
 
  private:
   void OnFrame(const msgs::RgbdFrame& frame);
+  /// This process's rank (its shard of the frames) and the NodeStatus values naming it.
+  void SetRank(const model::DistributedOptions& distributed);
 
   double shutdown_wait_s_ = 1.0;
+  RankSync ranks_{model::DistributedOptions()};  ///< this process's rank: its shard of frames
   /// Set in OnShutdown: the training thread no longer publishes (sockets are about to close).
   std::atomic<bool> closing_{false};
   std::unique_ptr<ReplayBuffer> buffer_;

@@ -2,6 +2,7 @@
 /// @brief The trainer node's parameters -> TrainerNodeOptions, and their validation.
 #include "nodes/trainer/trainer_node_options.h"
 
+#include "model/distributed.h"
 #include "nodes/runtime/option_error.h"
 
 namespace p2i::trainer {
@@ -20,6 +21,17 @@ void DeclareLoop(runtime::Parameters& p, TrainingLoop::Options* o) {
                                      "held-out frames for validation PSNR");
   o->max_rounds =
       p.Declare<int>("max_rounds", o->max_rounds, "stop training after N rounds (-1 = never)");
+  model::DistributedOptions& d = o->distributed;
+  d.world_size = p.Declare<int>("world_size", d.world_size,
+                                "data-parallel trainer processes (1 = this one only)");
+  d.rank = p.Declare<int>("rank", d.rank, "this process's rank, 0..world_size-1 (0 publishes)");
+  d.master = p.Declare<std::string>("master", d.master,
+                                    "HOST:PORT of rank 0's rendezvous (world_size > 1)");
+  d.address = p.Declare<std::string>(
+      "dist_address", d.address,
+      "this rank's address for Gloo; empty = 127.0.0.1 for a loopback master, else the host's");
+  d.timeout_s = p.Declare<double>("dist_timeout", d.timeout_s,
+                                  "s: rendezvous and every collective of the ranks");
 }
 
 }  // namespace
@@ -71,6 +83,19 @@ void TrainerNodeOptions::Validate() const {
               "e.g. max_val_frames:=8");
   CheckOption(loop.max_rounds >= -1, n, "max_rounds", loop.max_rounds, "be >= -1",
               "max_rounds:=-1 trains until stopped");
+  const model::DistributedOptions& d = loop.distributed;
+  CheckOption(d.world_size >= 1, n, "world_size", d.world_size, "be >= 1",
+              "world_size:=1 trains in this process only");
+  CheckOption(d.rank >= 0 && d.rank < d.world_size, n, "rank", d.rank,
+              "be in [0, " + std::to_string(d.world_size - 1) + "] for world_size " +
+                  std::to_string(d.world_size),
+              "one rank per trainer process, rank:=0 on the master's host");
+  CheckOption(d.world_size == 1 || model::IsHostPort(d.master), n, "master", d.master,
+              "be HOST:PORT when world_size > 1",
+              "rank 0's address and a free port, the same on every rank, e.g. "
+              "master:=127.0.0.1:29500");
+  CheckOption(d.timeout_s > 0.0, n, "dist_timeout", d.timeout_s, "be > 0",
+              "seconds, e.g. dist_timeout:=60");
   CheckOption(trainer_status_period >= 0.0, n, "trainer_status_period", trainer_status_period,
               "be >= 0", "seconds; 0 = no periodic TrainerStatus");
   CheckOption(shutdown_wait >= 0.0, n, "shutdown_wait", shutdown_wait, "be >= 0",

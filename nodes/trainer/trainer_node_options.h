@@ -14,7 +14,8 @@ namespace p2i::trainer {
 
 /// The trainer node's configuration (docs/TRAINER.md lists the parameters). `buffer` and `loop`
 /// carry the parameters that are theirs (buffer_mb -> buffer.max_mb, publish_every_steps ->
-/// loop.steps_per_round, checkpoint -> loop.warm_start, ...); the node fills in the rest (the
+/// loop.steps_per_round, checkpoint -> loop.warm_start, world_size / rank / master /
+/// dist_address / dist_timeout -> loop.distributed, ...); the node fills in the rest (the
 /// model config, work_dir, resolution) when it starts. A value type: thread-compatible.
 struct TrainerNodeOptions {
   std::string config_file;  ///< P2I-NET config YAML (model/presets/); "" = defaults
@@ -22,7 +23,7 @@ struct TrainerNodeOptions {
   std::string dataset;      ///< offline: dataset folder to train on; "" = online ("rgbd")
   std::string work_dir;     ///< checkpoints, versions, buffer; "" = $P2I_RUN_DIR/<node name>
   ReplayBuffer::Options buffer;  ///< max_mb, recent_fraction
-  TrainingLoop::Options loop;    ///< steps, threads, max_val_frames, warm_start, ...
+  TrainingLoop::Options loop;    ///< steps, threads, max_val_frames, warm_start, distributed...
   /// Frames needed before training starts: loop.min_frames (its default) once validated; an int
   /// here so that Validate() can show a negative value.
   int min_frames = static_cast<int>(TrainingLoop::Options().min_frames);

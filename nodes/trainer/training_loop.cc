@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "model/trainer.h"
+#include "nodes/trainer/rank_sync.h"
 #include "scene/capture.h"
 #include "scene/trajectory_io.h"
 
@@ -54,6 +55,7 @@ void TrainingLoop::Options::Validate() const {
   if (!warm_start.empty() && !fs::exists(warm_start))
     throw std::invalid_argument("TrainingLoop: warm-start checkpoint " + warm_start +
                                 " does not exist");
+  distributed.Validate();
 }
 
 std::string TrainingLoop::PosesPath(const std::string& version_path) {
@@ -78,6 +80,8 @@ TrainingLoop::TrainingLoop(const Options& options, ReplayBuffer* buffer,
       on_status_(std::move(on_status)) {
   options_.Validate();
   status_.set_phase("idle");
+  status_.set_world_size(static_cast<uint32_t>(options_.distributed.world_size));
+  status_.set_rank(static_cast<uint32_t>(options_.distributed.rank));
 }
 
 TrainingLoop::~TrainingLoop() {
@@ -140,7 +144,12 @@ void TrainingLoop::EmitStatus() {
 
 void TrainingLoop::ReadLosses() {
   // The trainer logs one JSON line per step; the last phase-1 step line has the losses.
-  std::ifstream in(options_.work_dir + "/train_log.jsonl", std::ios::binary);
+  // (model::Trainer's log name: ranks other than 0 write train_log.rank<R>.jsonl.)
+  const int rank = options_.distributed.Enabled() ? options_.distributed.rank : 0;
+  std::ifstream in(options_.work_dir + (rank > 0 ? "/train_log.rank" + std::to_string(rank) +
+                                                       ".jsonl"
+                                                 : "/train_log.jsonl"),
+                   std::ios::binary);
   if (!in) return;
   in.seekg(0, std::ios::end);
   const std::streamoff size = in.tellg();
@@ -170,6 +179,7 @@ void TrainingLoop::Main() {
     {
       std::lock_guard<std::mutex> lock(mutex_);
       error_ = e.what();
+      status_.set_error(error_);
     }
     SetPhase("error");
   }
@@ -180,15 +190,32 @@ void TrainingLoop::Main() {
   cv_.notify_all();
 }
 
+void TrainingLoop::WriteFirstCheckpoint(const scene::RgbdDataset& train,
+                                        const scene::RgbdDataset& val) {
+  // A 0-step run of this process alone: checkpoint.pt with the weights at step 0 and the pose
+  // normaliser of these frames, which every rank then resumes from.
+  model::TrainerOptions t;
+  t.out_dir = options_.work_dir;
+  t.phase = 1;
+  t.steps = 0;
+  t.threads = options_.threads;
+  t.progress = false;
+  t.max_val_frames = options_.max_val_frames;
+  model::Trainer(options_.config, t).Run(train, val);
+}
+
 void TrainingLoop::RunRounds() {
   const std::string ckpt = model::Trainer::CheckpointPath(options_.work_dir);
+  RankSync ranks(options_.distributed);
   int step = 0;   // phase-1 step of the checkpoint
   int step2 = 0;  // phase-2 (ENET) step of the checkpoint
   const bool enet = options_.config.enet && !options_.config.IsBaseline() &&
                     options_.enet_steps_per_round != 0;
   const int enet_steps =
       options_.enet_steps_per_round < 0 ? options_.steps_per_round : options_.enet_steps_per_round;
-  bool know_step = !fs::exists(ckpt);  // else a 0-step run reads it from the checkpoint
+  // Else a 0-step run reads it from the checkpoint; data-parallel ranks always start so, from
+  // rank 0's checkpoint (ShareCheckpoint below), whatever their own work dir holds.
+  bool know_step = !ranks.Enabled() && !fs::exists(ckpt);
   int rounds = 0;
   while (!stop_ && (options_.max_rounds < 0 || rounds < options_.max_rounds)) {
     scene::RgbdDataset all = buffer_->Snapshot();
@@ -198,6 +225,9 @@ void TrainingLoop::RunRounds() {
       cv_.wait_for(lock, std::chrono::milliseconds(100), [this] { return stop_.load(); });
       continue;
     }
+    // Every rank's round starts here together; each trains on the first n frames of its
+    // shard, n the smallest shard's size, so every shard weighs the same.
+    all.frames.erase(all.frames.begin() + ranks.AgreeFrames(all.frames.size()), all.frames.end());
     scene::RgbdDataset train, val;
     train.camera = val.camera = all.camera;
     const size_t n = all.frames.size();
@@ -210,6 +240,10 @@ void TrainingLoop::RunRounds() {
         train.frames.push_back(all.frames[i]);
     }
     SetPhase("training");
+    if (ranks.Enabled()) {
+      if (ranks.IsWriter() && !fs::exists(ckpt)) WriteFirstCheckpoint(train, val);
+      ranks.ShareCheckpoint(ckpt);
+    }
     model::TrainerOptions t;
     t.out_dir = options_.work_dir;
     t.phase = enet ? 0 : 1;
@@ -222,6 +256,7 @@ void TrainingLoop::RunRounds() {
     // Polled between steps: on Stop() the trainer saves checkpoint.pt at the current step
     // (atomically) and returns, so shutdown never abandons a round.
     t.should_stop = [this] { return stop_.load(); };
+    t.distributed = options_.distributed;  // every step's gradients averaged over the ranks
     const auto t0 = std::chrono::steady_clock::now();
     model::Trainer trainer(options_.config, t);
     const model::TrainReport report = trainer.Run(train, val);
@@ -252,6 +287,10 @@ void TrainingLoop::RunRounds() {
       std::lock_guard<std::mutex> lock(mutex_);
       status_.set_step(static_cast<uint64_t>(step));
       status_.set_steps_per_s(seconds > 0 ? done / seconds : 0.0);
+    }
+    if (!ranks.IsWriter()) {  // rank 0 publishes the version the ranks trained together
+      EmitStatus();
+      continue;
     }
     // Publish: a versioned copy, written atomically, that this loop never rewrites.
     const uint64_t version = version_ + 1;

@@ -12,6 +12,7 @@
 #include <string>
 #include <thread>
 
+#include "model/distributed.h"
 #include "model/p2i_config.h"
 #include "msgs/p2i.pb.h"
 #include "nodes/trainer/replay_buffer.h"
@@ -37,6 +38,16 @@ namespace p2i::trainer {
 /// set-up (dataset preparation, checkpoint load) and one step are not interruptible.
 /// Published versions are never touched again.
 ///
+/// Data-parallel (`distributed.world_size` > 1, docs/DISTRIBUTED.md): one loop per rank
+/// process, each on its own buffer (the node keeps the rank's shard of the frames). Every
+/// round starts with RankSync's collectives (nodes/trainer/rank_sync.h): the ranks agree on
+/// the round's frame count n (the smallest snapshot; each trains on the first n frames of its
+/// own) and every rank resumes from rank 0's checkpoint (for a fresh start rank 0 first writes
+/// a 0-step one alone, so the pose normaliser is rank 0's); model::Trainer then averages the
+/// gradients of every step. Only rank 0 writes versions and poses and calls `on_version`. A rank
+/// that died or timed out ends the loop with the "lost contact" error (Error(), and phase
+/// "error" with that `error` in TrainerStatus); a stop of any rank stops all at the same step.
+///
 /// Thread-safety: Start/Stop from one thread; callbacks run on the training thread (the caller
 /// must make them thread-safe, e.g. with locking publishers); LastStatus() is thread-safe.
 class TrainingLoop {
@@ -55,6 +66,7 @@ class TrainingLoop {
     int val_every_nth = 8;        ///< every n-th buffer frame is validation
     int max_val_frames = 8;
     int max_rounds = -1;          ///< stop after this many rounds (-1 = never; tests, offline)
+    model::DistributedOptions distributed;  ///< world_size 1 = this process only
 
     void Validate() const;
   };
@@ -90,6 +102,7 @@ class TrainingLoop {
   void SetPhase(const std::string& phase);
   void EmitStatus();
   void ReadLosses();
+  void WriteFirstCheckpoint(const scene::RgbdDataset& train, const scene::RgbdDataset& val);
 
   Options options_;
   ReplayBuffer* buffer_;

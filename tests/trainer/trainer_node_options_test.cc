@@ -6,6 +6,7 @@
 
 #include <catch2/catch.hpp>
 
+#include "nodes/runtime/option_error.h"
 #include "tests/option_test_util.h"
 
 namespace p2i::trainer {
@@ -14,7 +15,7 @@ namespace {
 using namespace p2i::testing;
 
 TEST_CASE("TrainerNodeOptions: declared defaults are the field initialisers", "[unit]") {
-  const runtime::Parameters p = CheckDefaults<TrainerNodeOptions>(15);
+  const runtime::Parameters p = CheckDefaults<TrainerNodeOptions>(20);
   const TrainingLoop::Options loop;
   CHECK(p.Declared().at("buffer_mb").default_text == "256");  // ReplayBuffer::Options'
   CHECK(p.Declared().at("publish_every_steps").default_text ==
@@ -22,6 +23,11 @@ TEST_CASE("TrainerNodeOptions: declared defaults are the field initialisers", "[
   CHECK(p.Declared().at("min_frames").default_text == std::to_string(loop.min_frames));
   CHECK(p.Declared().at("enet_steps_per_version").default_text == "-1");
   CHECK(TrainerNodeOptions().Loop().min_frames == loop.min_frames);
+  // One process unless asked: world_size 1 is today's single-process node.
+  CHECK(p.Declared().at("world_size").default_text == "1");
+  CHECK(p.Declared().at("dist_timeout").default_text ==
+        runtime::ShowOptionValue(model::DistributedOptions().timeout_s));
+  CHECK_FALSE(TrainerNodeOptions().Loop().distributed.Enabled());
 
   const TrainerNodeOptions s = OptionsFrom<TrainerNodeOptions>(
       {{"publish_every_steps", "4"}, {"min_frames", "4"}, {"checkpoint", "a.pt"}});
@@ -29,6 +35,15 @@ TEST_CASE("TrainerNodeOptions: declared defaults are the field initialisers", "[
   CHECK(s.Loop().min_frames == 4);
   CHECK(s.loop.warm_start == "a.pt");
   CHECK_NOTHROW(s.Validate());
+
+  const TrainerNodeOptions r = OptionsFrom<TrainerNodeOptions>(
+      {{"world_size", "2"}, {"rank", "1"}, {"master", "10.0.0.1:29500"}, {"dist_timeout", "5"}});
+  const model::DistributedOptions& d = r.Loop().distributed;
+  CHECK(d.Enabled());
+  CHECK(d.rank == 1);
+  CHECK(d.master == "10.0.0.1:29500");
+  CHECK(d.timeout_s == 5.0);
+  CHECK_NOTHROW(r.Validate());
 }
 
 TEST_CASE("TrainerNodeOptions::Validate refuses each bad value, naming parameter and value",
@@ -49,6 +64,16 @@ TEST_CASE("TrainerNodeOptions::Validate refuses each bad value, naming parameter
           {{{"max_rounds", "-5"}}, "max_rounds must be >= -1 (got -5)"},
           {{{"trainer_status_period", "-1"}}, "trainer_status_period must be >= 0 (got -1)"},
           {{{"shutdown_wait", "-0.5"}}, "shutdown_wait must be >= 0 (got -0.5)"},
+          {{{"world_size", "0"}}, "world_size must be >= 1 (got 0)"},
+          {{{"world_size", "2"}, {"rank", "2"}, {"master", "127.0.0.1:29500"}},
+           "rank must be in [0, 1] for world_size 2 (got 2)"},
+          {{{"rank", "-1"}}, "rank must be in [0, 0] for world_size 1 (got -1)"},
+          {{{"world_size", "2"}}, "master must be HOST:PORT when world_size > 1 (got '')"},
+          {{{"world_size", "2"}, {"master", "10.0.0.1"}},
+           "master must be HOST:PORT when world_size > 1 (got '10.0.0.1')"},
+          {{{"world_size", "2"}, {"master", "10.0.0.1:70000"}},
+           "master must be HOST:PORT when world_size > 1 (got '10.0.0.1:70000')"},
+          {{{"dist_timeout", "0"}}, "dist_timeout must be > 0 (got 0)"},
       });
 }
 
