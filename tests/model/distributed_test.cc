@@ -121,7 +121,7 @@ TEST_CASE("Two Gloo ranks on loopback give the weights of one rank with the doub
   fs::remove_all(dir);
 }
 
-TEST_CASE("A rank killed mid-run stops the other with a clear error; both resume from rank 0's "
+TEST_CASE("A rank killed mid-run stops the other with a clear error, and both resume from rank 0's "
           "intact checkpoint",
           "[integration]") {
   const auto dir = TempDir("dp_kill");

@@ -205,7 +205,7 @@ TEST_CASE("p2i_trainer world_size 2: rank 0 publishes the versions both ranks tr
 }
 
 TEST_CASE("p2i_trainer world_size 2: rank 1 SIGKILLed mid-run ends rank 0's training with "
-          "'lost contact' in its TrainerStatus; the last version loads",
+          "'lost contact' in its TrainerStatus, and the last version loads",
           "[integration]") {
   runtime::Shutdown::ResetForTesting();
   runtime::testing::ScopedRunDir run_dir;
