@@ -13,6 +13,7 @@
 
 #include "eval/bench_stages.h"
 #include "scene/trajectory.h"
+#include "tests/read_file.h"
 #include "tests/temp_dir.h"
 
 using namespace p2i::eval;
@@ -58,13 +59,6 @@ std::vector<ResultRow> LadderRows() {
           Row("p2i", "a1", "small", 1, 30.0, 4e5), Row("nearest", "b", "tiny", 1, 25.0, 0)};
 }
 
-std::string ReadText(const fs::path& path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
 }  // namespace
 
 TEST_CASE("bench auto-size stage: the smallest size within the margin of the best", "[unit]") {
@@ -105,7 +99,7 @@ TEST_CASE("bench auto-size stage: the smallest size within the margin of the bes
   AutoSizeStage(run);
   REQUIRE(run.auto_size.size() == 1);
   CHECK(run.auto_size[0] == ChooseOnLadder(c, LadderRows(), 0.5)->markdown);
-  CHECK(ReadText(dir / "auto_size.txt") ==
+  CHECK(p2i::testing::ReadFile(dir / "auto_size.txt") ==
         ChooseOnLadder(c, LadderRows(), 0.5)->choice.reason + "\n");
 }
 
@@ -135,7 +129,7 @@ TEST_CASE("bench report stage: report.md from fixed rows, without a measurement"
   CHECK(run.chart_inputs.settings == std::vector<std::string>{"a1", "b"});  // the paper's order
   run.dataset = "sim scene `x`";
   WriteBenchReport(run);
-  const std::string md = ReadText(dir / "report.md");
+  const std::string md = p2i::testing::ReadFile(dir / "report.md");
   CHECK(md.find("| data | sim scene `x` |") != std::string::npos);
   CHECK(md.find("| p2i | b | small | 1 | 20.50 |") != std::string::npos);
   CHECK(md.find("| nearest | b | tiny | 1 | 25.00 |") != std::string::npos);

@@ -14,6 +14,7 @@
 
 #include "eval/charts.h"
 #include "eval/report.h"
+#include "tests/read_file.h"
 #include "eval/strips.h"
 
 namespace fs = std::filesystem;
@@ -45,12 +46,6 @@ ChartInputs Inputs() {
   in.threshold_db = 18;
   return in;
 }
-std::string Slurp(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
 }  // namespace
 
 TEST_CASE("WriteCharts writes data and scripts, and PNG/SVG when gnuplot is there", "[unit]") {
@@ -69,12 +64,12 @@ TEST_CASE("WriteCharts writes data and scripts, and PNG/SVG when gnuplot is ther
   CHECK(std::find(out.charts.begin(), out.charts.end(), "accuracy_vs_speed_lpips") == out.charts.end());
   // The Pareto front of (speed, PSNR): nearest (fastest) and p2i/small (best); p2i/tiny is
   // slower and worse than p2i/small.
-  const std::string front = Slurp(dir / "nognuplot" / "accuracy_vs_speed_psnr_front.dat");
+  const std::string front = p2i::testing::ReadFile(dir / "nognuplot" / "accuracy_vs_speed_psnr_front.dat");
   CHECK(front.find("nearest/tiny") != std::string::npos);
   CHECK(front.find("p2i/small") != std::string::npos);
   CHECK(front.find("p2i/tiny") == std::string::npos);
   // Missing values are '?' (gnuplot's missing marker), not 0.
-  CHECK(Slurp(dir / "nognuplot" / "quality_per_setting_psnr.dat").find("?") != std::string::npos);
+  CHECK(p2i::testing::ReadFile(dir / "nognuplot" / "quality_per_setting_psnr.dat").find("?") != std::string::npos);
 
   if (std::system("command -v gnuplot >/dev/null 2>&1") == 0) {
     out = WriteCharts(Inputs(), (dir / "gp").string());

@@ -10,18 +10,13 @@
 #include <catch2/catch.hpp>
 
 #include "eval/report.h"
+#include "tests/read_file.h"
 #include "eval/results.h"
 
 namespace fs = std::filesystem;
 using namespace p2i::eval;
 
 namespace {
-std::string Slurp(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
 ResultRow Row(const std::string& method, int seed, double lpips) {
   ResultRow r;
   r.method = method;
@@ -53,7 +48,7 @@ TEST_CASE("ResultsStore writes one CSV/JSON row per completed combination, NA fo
     store.Add(Row("p2i", 1, 0.20));  // same key: replaces
     CHECK(store.rows().size() == 2);
   }
-  const std::string csv = Slurp(dir / "results.csv");
+  const std::string csv = p2i::testing::ReadFile(dir / "results.csv");
   std::istringstream lines(csv);
   std::string header, l1, l2, extra;
   std::getline(lines, header);
@@ -74,7 +69,7 @@ TEST_CASE("ResultsStore writes one CSV/JSON row per completed combination, NA fo
     CHECK(e.path().filename().string().find("tmp") == std::string::npos);
 
   std::string hash;
-  const auto rows = ParseResultsJson(Slurp(dir / "results.json"), &hash);
+  const auto rows = ParseResultsJson(p2i::testing::ReadFile(dir / "results.json"), &hash);
   CHECK(hash == "hash1");
   REQUIRE(rows.size() == 2);
   CHECK(std::isnan(rows[0].lpips));
@@ -84,7 +79,7 @@ TEST_CASE("ResultsStore writes one CSV/JSON row per completed combination, NA fo
   CHECK(rows[1].pose_dependence == Approx(0.875));
   REQUIRE(rows[1].views.size() == 1);
   CHECK(rows[1].views[0].coverage == Approx(0.9));
-  CHECK(Slurp(dir / "results.json").find("\"lpips_squeeze\": null") != std::string::npos);
+  CHECK(p2i::testing::ReadFile(dir / "results.json").find("\"lpips_squeeze\": null") != std::string::npos);
 
   // Resume: the same config hash reloads the rows; another one is refused with advice.
   ResultsStore again(dir.string(), "hash1");

@@ -25,6 +25,7 @@
 #include "convert/pose.h"
 #include "nodes/runtime/node.h"
 #include "nodes/runtime/shutdown.h"
+#include "tests/read_file.h"
 #include "tests/process_util.h"
 #include "tests/runtime/test_util.h"
 #include "tests/test_paths.h"
@@ -34,13 +35,6 @@ using namespace p2i;
 namespace fs = std::filesystem;
 
 namespace {
-
-std::string ReadText(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
 
 /// A master port of this test process (k: one per test case).
 std::string Port(int k) { return std::to_string(33000 + (::getpid() * 11 + k) % 20000); }
@@ -126,7 +120,7 @@ int FrameAt(const scene::RgbdDataset& sim, double x, double y, double z) {
 /// The frames of `sim` a TUM poses file names (by translation; -1 for an unknown pose).
 std::set<int> FramesOf(const scene::RgbdDataset& sim, const std::string& poses_path) {
   std::set<int> frames;
-  std::istringstream in(ReadText(poses_path));
+  std::istringstream in(p2i::testing::ReadFile(poses_path));
   std::string line;
   while (std::getline(in, line)) {
     if (line.empty() || line[0] == '#') continue;
@@ -159,8 +153,8 @@ TEST_CASE("p2i_trainer world_size 2: rank 0 publishes the versions both ranks tr
                h.HighestVersion(0) == 2;
       },
       std::chrono::seconds(120));
-  INFO("rank 0:\n" << ReadText(dir + "/rank0.log") << "\nrank 1:\n"
-                   << ReadText(dir + "/rank1.log"));
+  INFO("rank 0:\n" << p2i::testing::ReadFile(dir + "/rank0.log") << "\nrank 1:\n"
+                   << p2i::testing::ReadFile(dir + "/rank1.log"));
   REQUIRE(done);
   for (int rank : {0, 1}) {
     const auto s = h.Status(rank);
@@ -177,8 +171,8 @@ TEST_CASE("p2i_trainer world_size 2: rank 0 publishes the versions both ranks tr
   REQUIRE(fs::exists(v.checkpoint_path()));
 
   // Every phase-1 step all-reduced D's and G's gradients on both ranks (d_steps + 1 per step).
-  const auto stats0 = nlohmann::json::parse(ReadText(dir + "/r0/distributed.rank0.json"));
-  const auto stats1 = nlohmann::json::parse(ReadText(dir + "/r1/distributed.rank1.json"));
+  const auto stats0 = nlohmann::json::parse(p2i::testing::ReadFile(dir + "/r0/distributed.rank0.json"));
+  const auto stats1 = nlohmann::json::parse(p2i::testing::ReadFile(dir + "/r1/distributed.rank1.json"));
   const int per_step = config.d_steps + 1;
   CHECK(stats0["allreduce_calls"].get<int>() == 6 * per_step);
   CHECK(stats1["allreduce_calls"].get<int>() == 6 * per_step);
@@ -188,7 +182,7 @@ TEST_CASE("p2i_trainer world_size 2: rank 0 publishes the versions both ranks tr
   // The second round started on rank 1 from rank 0's checkpoint of version 1 (the same bytes).
   const std::string v1 = dir + "/r0/versions/model_v000001.pt";
   REQUIRE(fs::exists(v1));
-  CHECK(ReadText(dir + "/r1/checkpoint.pt") == ReadText(v1));
+  CHECK(p2i::testing::ReadFile(dir + "/r1/checkpoint.pt") == p2i::testing::ReadFile(v1));
 
   // Shards: frames are published in turn, so each rank's seq % 2 keeps every other one of the
   // 16 sim frames: the poses rank 0 trained on are all of one parity.
@@ -218,14 +212,14 @@ TEST_CASE("p2i_trainer world_size 2: rank 1 SIGKILLed mid-run ends rank 0's trai
   auto r1 = StartRank(dir, 1, port, "");
   const bool trained =
       h.RunUntil([&] { return h.HighestVersion(0) >= 2; }, std::chrono::seconds(120));
-  INFO("rank 0:\n" << ReadText(dir + "/rank0.log") << "\nrank 1:\n"
-                   << ReadText(dir + "/rank1.log"));
+  INFO("rank 0:\n" << p2i::testing::ReadFile(dir + "/rank0.log") << "\nrank 1:\n"
+                   << p2i::testing::ReadFile(dir + "/rank1.log"));
   REQUIRE(trained);
   ::kill(r1->pid(), SIGKILL);
   CHECK(r1->Wait() == -SIGKILL);
   const bool ended = h.RunUntil([&] { return h.Status(0).phase() == "error"; },
                                 std::chrono::seconds(60));
-  INFO("rank 0 after the kill:\n" << ReadText(dir + "/rank0.log"));
+  INFO("rank 0 after the kill:\n" << p2i::testing::ReadFile(dir + "/rank0.log"));
   REQUIRE(ended);
   const auto s = h.Status(0);
   CHECK(s.error().find("lost contact with the other ranks") != std::string::npos);

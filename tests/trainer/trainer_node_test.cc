@@ -17,6 +17,7 @@
 #include "nodes/runtime/shutdown.h"
 #include "scene/capture.h"
 #include "scene/trajectory_io.h"
+#include "tests/read_file.h"
 #include "tests/runtime/test_util.h"
 #include "tests/test_paths.h"
 #include "tests/trainer/trainer_test_util.h"
@@ -51,11 +52,6 @@ bool WaitForExit(pid_t pid, std::chrono::seconds limit, int* status) {
   kill(pid, SIGKILL);
   waitpid(pid, status, 0);
   return false;
-}
-
-std::string ReadText(const std::string& path) {
-  std::ifstream in(path);
-  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
 }
 
 int CountLines(const std::string& path, const std::string& needle) {
@@ -110,7 +106,7 @@ TEST_CASE("p2i_trainer: offline data at 32x32 publishes a ModelVersion, SIGTERM 
   const bool alive = waitpid(pid, &status, WNOHANG) == 0;
   if (!got_all() || !alive) {
     if (alive) kill(pid, SIGKILL), waitpid(pid, &status, 0);
-    FAIL("no ModelVersion received; trainer stderr:\n" << ReadText(err_path));
+    FAIL("no ModelVersion received; trainer stderr:\n" << p2i::testing::ReadFile(err_path));
   }
   CHECK(versions.front().version() >= 1);
   CHECK(versions.front().width() == 32);
@@ -176,8 +172,8 @@ TEST_CASE("p2i_trainer: SIGTERM inside a long round stops it at a step boundary 
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (!exited)
-    FAIL("p2i_trainer did not exit after SIGTERM:\n" << ReadText(dir + "/stderr1.txt"));
-  const std::string err1 = ReadText(dir + "/stderr1.txt");
+    FAIL("p2i_trainer did not exit after SIGTERM:\n" << p2i::testing::ReadFile(dir + "/stderr1.txt"));
+  const std::string err1 = p2i::testing::ReadFile(dir + "/stderr1.txt");
   INFO(err1);
   std::fprintf(stderr, "p2i_trainer: SIGTERM mid-round -> exit after %.2f s\n", seconds);
   CHECK(WIFEXITED(status));
@@ -209,7 +205,7 @@ TEST_CASE("p2i_trainer: SIGTERM inside a long round stops it at a step boundary 
     listener.SpinOnce(std::chrono::milliseconds(20));
   kill(pid2, SIGTERM);
   waitpid(pid2, &status, 0);
-  INFO(ReadText(dir + "/stderr2.txt"));
+  INFO(p2i::testing::ReadFile(dir + "/stderr2.txt"));
   REQUIRE(!versions.empty());
   CHECK(versions.front().version() == 1);
   CHECK(versions.front().step() == static_cast<uint64_t>(saved_step + 2));
