@@ -4,10 +4,29 @@
 
 #include <stdexcept>
 
+#include <yaml-cpp/yaml.h>
+
 #include "model/method_registry.h"
 #include "nodes/runtime/option_error.h"
 
 namespace p2i::nodes {
+
+namespace {
+
+/// method_options as the loader takes it, YAML text: a string as given (a launch file's quoted
+/// "{k: 4}"), a map or list as flow text (method_options:='{k: 4}' on the command line, which
+/// arrives parsed), nothing as "".
+std::string MethodOptionsText(const YAML::Node& value) {
+  if (!value || value.IsNull()) return "";
+  if (value.IsScalar()) return value.as<std::string>();
+  YAML::Emitter out;
+  out.SetMapFormat(YAML::Flow);
+  out.SetSeqFormat(YAML::Flow);
+  out << value;
+  return out.c_str();
+}
+
+}  // namespace
 
 SynthesizerOptions SynthesizerOptions::FromParameters(runtime::Parameters& params) {
   SynthesizerOptions o;  // the defaults, written once in the field initialisers
@@ -28,9 +47,9 @@ SynthesizerOptions SynthesizerOptions::FromParameters(runtime::Parameters& param
       params.Declare<int>("dataset_stride", o.dataset_stride, "keep every N-th training frame");
   o.loader.threads =
       params.Declare<int>("threads", o.loader.threads, "torch threads (learned methods)");
-  o.loader.method_options = params.Declare<std::string>(
-      "method_options", o.loader.method_options,
-      "the method's own options as a YAML map, e.g. '{k: 4}' for warp");
+  o.loader.method_options = MethodOptionsText(params.Declare<YAML::Node>(
+      "method_options", YAML::Node(o.loader.method_options),
+      "the method's own options as a YAML map, e.g. '{k: 4}' for warp"));
   o.core.max_poses =
       params.Declare<int>("max_poses", o.core.max_poses, "most poses in one RenderRequest");
   o.core.max_batch =

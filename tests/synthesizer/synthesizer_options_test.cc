@@ -43,7 +43,11 @@ TEST_CASE("SynthesizerOptions: parameters override; Validate shows the bad value
   CHECK(SynthesizerOptions().Learned());  // p2i
   CHECK(o.width == 160);
   CHECK(o.height == 120);
-  CHECK(o.loader.method_options == "{k: 2}");
+  CHECK(o.loader.method_options == "{k: 2}");  // method_options:='{k: 2}' arrives as a map
+  Parameters quoted;
+  quoted.SetOverride("method_options", "'{k: 2, fill_holes: false}'");  // a launch file's string
+  CHECK(SynthesizerOptions::FromParameters(quoted).loader.method_options ==
+        "{k: 2, fill_holes: false}");
   CHECK_FALSE(o.topic_mode);
   CHECK_NOTHROW(o.Validate());
 
