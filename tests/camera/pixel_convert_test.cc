@@ -67,7 +67,7 @@ TEST_CASE("Bayer formats demosaic to the right colours (GenICam names)", "[unit]
   }
 }
 
-TEST_CASE("Mono16 depth scales to metres, 0 stays invalid; short buffers are errors",
+TEST_CASE("Mono16 depth scales to metres, 0 stays invalid, short buffers are errors",
           "[unit]") {
   const std::vector<uint16_t> raw = {0, 1000, 1500, 65535};
   std::vector<uint8_t> bytes(8);

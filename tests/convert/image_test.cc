@@ -9,7 +9,7 @@
 namespace p2i::convert {
 namespace {
 
-TEST_CASE("ToImage packs RGB and metric depth; ToMat views them back", "[unit]") {
+TEST_CASE("ToImage packs RGB and metric depth, ToMat views them back", "[unit]") {
   cv::Mat rgb(2, 3, CV_8UC3, cv::Scalar(10, 20, 30));
   rgb.at<cv::Vec3b>(1, 2) = cv::Vec3b(200, 100, 50);
   const msgs::Image a = ToImage(rgb);

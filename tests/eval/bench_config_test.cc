@@ -135,7 +135,7 @@ sizes: [64]
             .find("exactly one") != std::string::npos);
 }
 
-TEST_CASE("Bench config: the shipped sim configs render with the sensor model; exact on request",
+TEST_CASE("Bench config: the shipped sim configs render with the sensor model, exact on request",
           "[unit]") {
   for (const char* name :
        {"tiny", "small_office_128", "large_office_128", "small_office_128_long", "ablation_64"}) {

@@ -109,7 +109,7 @@ TEST_CASE("damaged checkpoints are refused by start-up, export and warm start", 
   fs::remove_all(dir);
 }
 
-TEST_CASE("format-1 checkpoints load; a record cut short in one is refused", "[unit]") {
+TEST_CASE("format-1 checkpoints load, a record cut short in one is refused", "[unit]") {
   const auto dir = TempDir("ckpt_v1");
   const std::string v1_container = ReadBytes(TinyInference(dir, "v1_src.pt", 1));
   const auto parts = p2i::testing::SplitCheckpoint(v1_container);

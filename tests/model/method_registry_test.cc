@@ -49,7 +49,7 @@ TEST_CASE("The registry lists each method once, with unique names and aliases", 
   CHECK(MethodNames().rfind("p2i, cnn, nearest, warp", 0) == 0);
 }
 
-TEST_CASE("Configure checks options at start-up; factories build from frames", "[unit]") {
+TEST_CASE("Configure checks options at start-up, factories build from frames", "[unit]") {
   const auto training = SmallTraining();
   MethodInputs in;
   in.training = training;

@@ -177,7 +177,7 @@ TEST_CASE("L_PE-Ig is zero inside the gamma tolerance", "[unit]") {
   CHECK(t.pe_fake.item<float>() == Approx(0.0));
 }
 
-TEST_CASE("L_G = -D_pro(I_g) + pose error; the pose term only with LD", "[unit]") {
+TEST_CASE("L_G = -D_pro(I_g) + pose error, the pose term only with LD", "[unit]") {
   DOutput fake;
   fake.latent = Leaf({1, 0}, {1, 2});
   fake.score = Leaf({0.3f}, {1});

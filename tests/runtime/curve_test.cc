@@ -129,7 +129,7 @@ void SendRawTcp(int port, const std::string& bytes) {
 
 }  // namespace
 
-TEST_CASE("CURVE: key files round-trip; bad keys and key directories are named", "[unit]") {
+TEST_CASE("CURVE: key files round-trip, bad keys and key directories are named", "[unit]") {
   REQUIRE(CurveAvailable());
   ScopedRunDir dir;
   const CurveKeyPair k = GenerateCurveKeyPair();
@@ -185,7 +185,7 @@ TEST_CASE("CURVE: ipc endpoints live in a run directory only the user can open",
   CHECK((st.st_mode & 0777) == 0700);
 }
 
-TEST_CASE("CURVE: an authorised subscriber gets the data; a plain one is refused", "[integration]") {
+TEST_CASE("CURVE: an authorised subscriber gets the data, a plain one is refused", "[integration]") {
   ScopedRunDir dir;
   Keys keys;
   ScopedCurve curve(keys);

@@ -22,7 +22,7 @@ std::string ErrorOf(F f) {
 }
 }  // namespace
 
-TEST_CASE("CheckOption: NODE: NAME must RULE (got VALUE); FIX, values shown by type", "[unit]") {
+TEST_CASE("CheckOption: NODE: NAME must RULE (got VALUE) - FIX, values shown by type", "[unit]") {
   CHECK(ErrorOf([] { CheckOption(true, "n", "rate", 0.0, "be > 0", "e.g. rate:=1"); }).empty());
   CHECK(ErrorOf([] { CheckOption(false, "n", "rate", 0.05, "be > 1", "e.g. rate:=2"); }) ==
         "n: rate must be > 1 (got 0.05); e.g. rate:=2");

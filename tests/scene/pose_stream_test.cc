@@ -73,7 +73,7 @@ TEST_CASE("PoseStream tolerance edges: both bracketing poses must be within it",
   CHECK(stream.Lookup(10 * kMs, 90 * kMs - 1).status == PoseLookupStatus::kGapTooBig);
 }
 
-TEST_CASE("PoseStream keeps poses sorted whatever the arrival order; duplicates replace",
+TEST_CASE("PoseStream keeps poses sorted whatever the arrival order, duplicates replace",
           "[unit]") {
   PoseStream stream(16);
   stream.Add(300 * kMs, YawPose(3, 0, 0, 0));

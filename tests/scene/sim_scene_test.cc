@@ -390,7 +390,7 @@ lights:
   CHECK((found[0] - found[1]).norm() > 0.5);  // it moved with the view
 }
 
-TEST_CASE("SimScene large office has view-dependent materials; Lambertian() removes them",
+TEST_CASE("SimScene large office has view-dependent materials, Lambertian() removes them",
           "[unit]") {
   const SimScene scene = SimScene::BuiltIn("large_office");
   CHECK(scene.description().AnyViewDependent());

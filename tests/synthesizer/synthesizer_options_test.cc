@@ -30,7 +30,7 @@ TEST_CASE("SynthesizerOptions: declared defaults are the field initialisers", "[
   CHECK_NOTHROW(o.Validate());
 }
 
-TEST_CASE("SynthesizerOptions: parameters override; Validate shows the bad value", "[unit]") {
+TEST_CASE("SynthesizerOptions: parameters override, Validate shows the bad value", "[unit]") {
   Parameters p;
   p.SetOverride("method", "warp");
   p.SetOverride("width", "160");

@@ -35,7 +35,7 @@ std::string TinyYaml() {
 
 }  // namespace
 
-TEST_CASE("p2i train writes a progress bar, a JSON-lines log and a checkpoint; --resume continues",
+TEST_CASE("p2i train writes a progress bar, a JSON-lines log and a checkpoint, --resume continues",
           "[integration]") {
   const fs::path dir = p2i::testing::FreshDir("train_tool");
   {

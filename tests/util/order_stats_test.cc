@@ -16,7 +16,7 @@ namespace {
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-TEST_CASE("Median and percentiles of finite values; NaN and inf are dropped", "[unit]") {
+TEST_CASE("Median and percentiles of finite values, NaN and inf are dropped", "[unit]") {
   const std::vector<double> v = {5, 1, kNaN, 4, 2, kInf, 3};  // finite: 1 2 3 4 5
   CHECK(FiniteValues(v) == std::vector<double>{5, 1, 4, 2, 3});
   CHECK(Median(v) == 3.0);
