@@ -16,6 +16,7 @@
 #include "tests/checkpoint_tamper.h"
 #include "tests/model/model_test_util.h"
 #include "tests/process_util.h"
+#include "tests/read_file.h"
 #include "tests/skip.h"
 #include "tests/test_paths.h"
 
@@ -23,7 +24,7 @@ namespace fs = std::filesystem;
 using namespace p2i::model;
 using namespace p2i::model::testing;
 using p2i::testing::Damaged;
-using p2i::testing::ReadBytes;
+using p2i::testing::ReadFile;
 using p2i::testing::WriteBytes;
 
 namespace {
@@ -71,7 +72,7 @@ const Damage kDamages[] = {
 TEST_CASE("the saver writes format 2: header with size, CRC-32 and tensor manifest", "[unit]") {
   const auto dir = TempDir("ckpt_format");
   const std::string path = TinyInference(dir, "good.pt");
-  const std::string bytes = ReadBytes(path);
+  const std::string bytes = ReadFile(path);
   CHECK(bytes.rfind("P2ICKPT 2\n{\"payload_bytes\":", 0) == 0);
   CHECK(bytes.find("\"G/") != std::string::npos);  // manifest entries
   auto s = LoadSynthesizer(path);
@@ -82,7 +83,7 @@ TEST_CASE("the saver writes format 2: header with size, CRC-32 and tensor manife
 
 TEST_CASE("damaged checkpoints are refused by start-up, export and warm start", "[unit]") {
   const auto dir = TempDir("ckpt_damage");
-  const std::string good = ReadBytes(TinyInference(dir, "good.pt"));
+  const std::string good = ReadFile(TinyInference(dir, "good.pt"));
   const auto data = MakeProceduralDataset(6, 32);
   for (const Damage& d : kDamages) {
     SECTION(d.kind) {
@@ -111,7 +112,7 @@ TEST_CASE("damaged checkpoints are refused by start-up, export and warm start", 
 
 TEST_CASE("format-1 checkpoints load, a record cut short in one is refused", "[unit]") {
   const auto dir = TempDir("ckpt_v1");
-  const std::string v1_container = ReadBytes(TinyInference(dir, "v1_src.pt", 1));
+  const std::string v1_container = ReadFile(TinyInference(dir, "v1_src.pt", 1));
   const auto parts = p2i::testing::SplitCheckpoint(v1_container);
   WriteBytes(dir + "/v1.pt", parts.payload);  // a bare zip, as format 1 wrote it
   auto a = LoadSynthesizer(dir + "/v1.pt");
@@ -119,7 +120,7 @@ TEST_CASE("format-1 checkpoints load, a record cut short in one is refused", "[u
   const auto pose = p2i::scene::Pose::Identity();
   CHECK(cv::norm(a->Render(pose).rgb, b->Render(pose).rgb, cv::NORM_INF) == 0.0);
   ExportInference(dir + "/v1.pt", dir + "/reexported.pt");  // re-exported as format 2
-  CHECK(ReadBytes(dir + "/reexported.pt").rfind("P2ICKPT 2\n", 0) == 0);
+  CHECK(ReadFile(dir + "/reexported.pt").rfind("P2ICKPT 2\n", 0) == 0);
 
   WriteBytes(dir + "/v1_cut.pt", Damaged(v1_container, "record_v1"));
   CHECK_THROWS_WITH(LoadSynthesizer(dir + "/v1_cut.pt"),
@@ -159,7 +160,7 @@ TEST_CASE("finite weights whose probe view overflows are refused at load", "[uni
 TEST_CASE("p2i export of a torn checkpoint exits non-zero naming it and leaves no .tmp",
           "[integration]") {
   const auto dir = TempDir("ckpt_export_cli");
-  const std::string good = ReadBytes(TinyInference(dir, "good.pt"));
+  const std::string good = ReadFile(TinyInference(dir, "good.pt"));
   WriteBytes(dir + "/torn.pt", Damaged(good, "record"));
   int code = -1;
   const std::string out = p2i::testing::RunCommand(

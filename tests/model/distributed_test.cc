@@ -8,7 +8,6 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
-#include <sstream>
 #include <thread>
 
 #include <catch2/catch.hpp>
@@ -19,20 +18,16 @@
 #include "model/distributed.h"
 #include "tests/model/model_test_util.h"
 #include "tests/process_util.h"
+#include "tests/read_file.h"
 #include "tests/test_paths.h"
 
 using namespace p2i::model;
 using namespace p2i::model::testing;
 namespace fs = std::filesystem;
 
-namespace {
+using p2i::testing::ReadFile;
 
-std::string Slurp(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+namespace {
 
 std::string Port() { return std::to_string(30000 + (::getpid() * 7) % 20000); }
 
@@ -99,7 +94,7 @@ TEST_CASE("Two Gloo ranks on loopback give the weights of one rank with the doub
   auto r0 = Train(dist + "0", dir + "/rank0.log");
   auto r1 = Train(dist + "1", dir + "/rank1.log");
   const int c0 = r0->Wait(), c1 = r1->Wait();
-  INFO(Slurp(dir + "/rank0.log") << Slurp(dir + "/rank1.log"));
+  INFO(ReadFile(dir + "/rank0.log") << ReadFile(dir + "/rank1.log"));
   REQUIRE(c0 == 0);
   REQUIRE(c1 == 0);
   CHECK(ReadCheckpointMeta(dir + "/two/checkpoint.pt").phase1_step == 5);
@@ -115,7 +110,7 @@ TEST_CASE("Two Gloo ranks on loopback give the weights of one rank with the doub
   Networks n(c);
   int64_t numel = 0;
   for (const auto& p : n.g->parameters()) numel += p.numel();
-  const auto stats = nlohmann::json::parse(Slurp(dir + "/two/distributed.rank0.json"));
+  const auto stats = nlohmann::json::parse(ReadFile(dir + "/two/distributed.rank0.json"));
   CHECK(stats["bytes_per_allreduce"].get<int64_t>() == 4 * numel);
   CHECK(stats["allreduce_calls"].get<int>() == 5);
   fs::remove_all(dir);
@@ -135,14 +130,14 @@ TEST_CASE("A rank killed mid-run stops the other with a clear error, and both re
   auto r0 = Train(common + " --steps 1000000 --rank 0", dir + "/rank0.log");
   auto r1 = Train(common + " --steps 1000000 --rank 1", dir + "/rank1.log");
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
-  while (Slurp(dir + "/run/train_log.jsonl").find("\"step\":20") == std::string::npos &&
+  while (ReadFile(dir + "/run/train_log.jsonl").find("\"step\":20") == std::string::npos &&
          std::chrono::steady_clock::now() < deadline)
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
-  REQUIRE(Slurp(dir + "/run/train_log.jsonl").find("\"step\":20") != std::string::npos);
+  REQUIRE(ReadFile(dir + "/run/train_log.jsonl").find("\"step\":20") != std::string::npos);
   ::kill(r1->pid(), SIGKILL);
   CHECK(r1->Wait() == -SIGKILL);
   const int c0 = r0->Wait();  // no hang: the dead peer's connection fails the all-reduce
-  const std::string log0 = Slurp(dir + "/rank0.log");
+  const std::string log0 = ReadFile(dir + "/rank0.log");
   INFO(log0);
   CHECK(c0 != 0);
   CHECK(log0.find("lost contact with the other ranks") != std::string::npos);
@@ -157,7 +152,7 @@ TEST_CASE("A rank killed mid-run stops the other with a clear error, and both re
   auto q0 = Train(common + to + "0", dir + "/resume0.log");
   auto q1 = Train(common + to + "1", dir + "/resume1.log");
   const int e0 = q0->Wait(), e1 = q1->Wait();
-  INFO(Slurp(dir + "/resume0.log") << Slurp(dir + "/resume1.log"));
+  INFO(ReadFile(dir + "/resume0.log") << ReadFile(dir + "/resume1.log"));
   CHECK(e0 == 0);
   CHECK(e1 == 0);
   CHECK(ReadCheckpointMeta(dir + "/run/checkpoint.pt").phase1_step == meta.phase1_step + 3);

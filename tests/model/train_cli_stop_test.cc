@@ -4,7 +4,6 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
-#include <sstream>
 #include <thread>
 
 #include <catch2/catch.hpp>
@@ -13,22 +12,14 @@
 #include "model/checkpoint.h"
 #include "tests/model/model_test_util.h"
 #include "tests/process_util.h"
+#include "tests/read_file.h"
 #include "tests/test_paths.h"
 
 namespace fs = std::filesystem;
 using namespace p2i::model;
 using namespace p2i::model::testing;
 
-namespace {
-
-std::string Slurp(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
-}  // namespace
+using p2i::testing::ReadFile;
 
 TEST_CASE("p2i train stops on SIGTERM with a checkpoint at the current step", "[integration]") {
   const auto dir = TempDir("train_stop");
@@ -43,13 +34,13 @@ TEST_CASE("p2i train stops on SIGTERM with a checkpoint at the current step", "[
     REQUIRE(train.pid() > 0);
     // Wait until it has trained a few steps (a loss line every 10 steps).
     const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(50);
-    while (Slurp(log).find("\"step\":10") == std::string::npos &&
+    while (ReadFile(log).find("\"step\":10") == std::string::npos &&
            std::chrono::steady_clock::now() < deadline)
       std::this_thread::sleep_for(std::chrono::milliseconds(100));
-    REQUIRE(Slurp(log).find("\"step\":10") != std::string::npos);
+    REQUIRE(ReadFile(log).find("\"step\":10") != std::string::npos);
     CHECK(train.Terminate() == 0);  // SIGTERM: stop hook, checkpoint, normal exit
   }
-  const std::string text = Slurp(log);
+  const std::string text = ReadFile(log);
   CHECK(text.find("\"event\":\"stopped\"") != std::string::npos);
   const auto meta = ReadCheckpointMeta(dir + "/run/checkpoint.pt");
   CHECK(meta.phase1_step >= 10);

@@ -5,7 +5,6 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <sstream>
 
 #include <catch2/catch.hpp>
 #include <torch/torch.h>
@@ -16,21 +15,13 @@
 #include "model/procedural_dataset.h"
 #include "model/trainer.h"
 #include "tests/model/model_test_util.h"
+#include "tests/read_file.h"
 
 namespace fs = std::filesystem;
 using namespace p2i::model;
 using namespace p2i::model::testing;
 
-namespace {
-
-std::string ReadAll(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
-}  // namespace
+using p2i::testing::ReadFile;
 
 TEST_CASE("checkpoint round trip keeps weights and metadata", "[unit]") {
   const auto dir = TempDir("roundtrip");
@@ -83,14 +74,14 @@ TEST_CASE("atomic write: a failed write leaves the old file and no temporary", "
   const auto dir = TempDir("atomic");
   const std::string path = dir + "/file.bin";
   WriteFileAtomically(path, [](const std::string& tmp) { std::ofstream(tmp) << "old"; });
-  CHECK(ReadAll(path) == "old");
+  CHECK(ReadFile(path) == "old");
   CHECK_THROWS_WITH(WriteFileAtomically(path,
                                         [](const std::string& tmp) {
                                           std::ofstream(tmp) << "half-writ";
                                           throw std::runtime_error("disk full");
                                         }),
                     Catch::Contains("disk full"));
-  CHECK(ReadAll(path) == "old");
+  CHECK(ReadFile(path) == "old");
   int files = 0;
   for (const auto& e : fs::directory_iterator(dir)) {
     (void)e;
@@ -144,7 +135,7 @@ TEST_CASE("the divergence guard rolls back on an injected NaN and lowers the LR"
   const auto report = Trainer(c, opt).Run(data, data);
   CHECK(report.rollbacks == 1);
   CHECK(report.phase1_steps == 10);
-  const auto log = ReadAll(report.log_path);
+  const auto log = ReadFile(report.log_path);
   CHECK(log.find("\"event\":\"rollback\"") != std::string::npos);
   CHECK(log.find("\"to_phase1_step\":3") != std::string::npos);  // last checkpoint before 5
   Networks n(c);
@@ -170,7 +161,7 @@ TEST_CASE("validation logs the pose-dependence score, and recon_weight, fourier 
   const auto report = Trainer(c, Quiet(dir, 5)).Run(train, val);
   CHECK(std::isfinite(report.val_pose_dependence));
   CHECK(report.val_pose_dependence >= 0.0);
-  const std::string log = ReadAll(report.log_path);
+  const std::string log = ReadFile(report.log_path);
   CHECK(log.find("\"pose_dependence\":") != std::string::npos);
   CHECK(log.find("\"g_recon\":") != std::string::npos);
   CHECK(log.find("\"d_r1\":") != std::string::npos);

@@ -14,26 +14,21 @@
 #include <functional>
 #include <map>
 #include <regex>
-#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
 
 #include <catch2/catch.hpp>
 
+#include "tests/read_file.h"
 #include "tests/test_paths.h"
 
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
-namespace {
+using p2i::testing::ReadFile;
 
-std::string Slurp(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+namespace {
 
 // `p2i launch ARGS` with stdout+stderr to `log`, P2I_RUN_DIR unset (the launcher makes its own).
 pid_t StartLaunch(const std::vector<std::string>& args, const std::string& log) {
@@ -101,7 +96,7 @@ TEST_CASE("kill -9 of p2i launch: nodes shut down cleanly at once, the next laun
   std::map<std::string, pid_t> node_pids;  // node -> pid
   const bool up = WaitUntil([&] {
     std::smatch m;
-    const std::string text = Slurp(log1);
+    const std::string text = ReadFile(log1);
     if (run_dir.empty() && std::regex_search(text, m, std::regex("P2I_RUN_DIR=(\\S+)")))
       run_dir = m[1];
     if (run_dir.empty() || !fs::exists(run_dir + "/registry")) return false;
@@ -114,7 +109,7 @@ TEST_CASE("kill -9 of p2i launch: nodes shut down cleanly at once, the next laun
     }
     return node_pids.size() == 2;
   }, 30.0);
-  INFO(Slurp(log1));
+  INFO(ReadFile(log1));
   REQUIRE(up);
   std::string params_dir;
   for (const auto& e : fs::directory_iterator("/tmp")) {
@@ -161,7 +156,7 @@ TEST_CASE("kill -9 of p2i launch: nodes shut down cleanly at once, the next laun
   const std::string log2 = (dir / "launch2.log").string();
   const pid_t second = StartLaunch({bad}, log2);
   REQUIRE(::waitpid(second, &status, 0) == second);
-  const std::string text = Slurp(log2);
+  const std::string text = ReadFile(log2);
   INFO(text);
   CHECK(WIFEXITED(status));
   CHECK(WEXITSTATUS(status) == 1);  // a node failed

@@ -21,6 +21,7 @@
 #include "msgs/codec.h"
 #include "nodes/runtime/raw_subscriber.h"
 #include "tests/process_util.h"
+#include "tests/read_file.h"
 #include "tests/runtime/test_util.h"
 #include "tests/test_paths.h"
 
@@ -56,12 +57,7 @@ class LaunchedGraph {
   /// SIGTERM to the launcher (every node gets SIGTERM); its exit code.
   int Stop() { return launcher_->Terminate(); }
   bool Running() const { return launcher_->Running(); }
-  std::string Log() const {
-    std::ifstream in(log_);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    return ss.str();
-  }
+  std::string Log() const { return p2i::testing::ReadFile(log_); }
 
  private:
   runtime::testing::ScopedRunDir run_;

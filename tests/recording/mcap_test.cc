@@ -9,6 +9,7 @@
 #include "recording/compression.h"
 #include "recording/mcap_reader.h"
 #include "recording/mcap_writer.h"
+#include "tests/read_file.h"
 #include "tests/recording/recording_test_util.h"
 
 using namespace p2i::recording;
@@ -106,7 +107,7 @@ TEST_CASE("MCAP: written messages read back identical with zstd, lz4 and none", 
 TEST_CASE("MCAP: file layout follows the spec (magic, header, data end, footer)", "[unit]") {
   const std::string dir = rt::TempDir("mcap_layout");
   WriteSample(dir + "/f.mcap", McapWriterOptions(), 5);
-  const std::string b = rt::ReadFile(dir + "/f.mcap");
+  const std::string b = p2i::testing::ReadFile(dir + "/f.mcap");
   REQUIRE(b.size() > 16 + 29);
   CHECK(std::memcmp(b.data(), mcap::kMagic, 8) == 0);
   CHECK(std::memcmp(b.data() + b.size() - 8, mcap::kMagic, 8) == 0);
@@ -131,7 +132,7 @@ TEST_CASE("MCAP: a truncated file (writer killed) is read up to its last complet
   McapWriterOptions o;
   o.chunk_size = 8 * 1024;
   WriteSample(dir + "/full.mcap", o, 100);
-  const std::string full = rt::ReadFile(dir + "/full.mcap");
+  const std::string full = p2i::testing::ReadFile(dir + "/full.mcap");
   McapReader whole;
   std::string error;
   REQUIRE(whole.Open(dir + "/full.mcap", &error));
@@ -173,7 +174,7 @@ TEST_CASE("MCAP: a corrupted chunk stops the scan at that chunk (CRC), never a c
   o.compression = "";  // a flipped byte would otherwise fail decompression, not the CRC
   o.chunk_size = 8 * 1024;
   WriteSample(dir + "/f.mcap", o, 60);
-  std::string b = rt::ReadFile(dir + "/f.mcap");
+  std::string b = p2i::testing::ReadFile(dir + "/f.mcap");
   McapReader ok;
   std::string error;
   REQUIRE(ok.Open(dir + "/f.mcap", &error));

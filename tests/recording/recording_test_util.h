@@ -1,5 +1,7 @@
 /// @file recording_test_util.h
-/// @brief Helpers of the recording tests: temp folders, sample p2i messages, file bytes.
+/// @brief Helpers of the recording tests: temp folders, sample p2i messages, writing file bytes
+/// (reading them: p2i::testing::ReadFile, tests/read_file.h, not included here: its namespace
+/// p2i::testing would make `testing::` ambiguous in files using namespace p2i::recording).
 #pragma once
 
 #include <unistd.h>
@@ -41,11 +43,6 @@ inline msgs::RgbdFrame SampleFrame(uint32_t w, uint32_t h, int seed) {
   auto* d = reinterpret_cast<float*>(f.depth.MutableData());
   for (size_t i = 0; i < static_cast<size_t>(w) * h; ++i) d[i] = 0.5f + 0.001f * (i % 1000) + seed;
   return f;
-}
-
-inline std::string ReadFile(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
 }
 
 inline void WriteFile(const std::string& path, const std::string& bytes) {

@@ -9,12 +9,12 @@
 #include <unistd.h>
 
 #include <fstream>
-#include <sstream>
 #include <thread>
 
 #include "nodes/runtime/endpoints.h"
 #include "nodes/runtime/node.h"
 #include "nodes/runtime/shutdown.h"
+#include "tests/read_file.h"
 #include "tests/runtime/test_util.h"
 #include "tests/test_paths.h"
 
@@ -83,12 +83,7 @@ class ChildNode {
     return -1;
   }
   void Signal(int sig) { kill(pid_, sig); }
-  std::string Stderr() const {
-    std::ifstream in(err_path_);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    return ss.str();
-  }
+  std::string Stderr() const { return p2i::testing::ReadFile(err_path_); }
   int Pid() const { return pid_; }
 
  private:

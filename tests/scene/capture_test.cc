@@ -13,6 +13,7 @@
 
 #include "scene/capture.h"
 #include "scene/dataset_loader.h"
+#include "tests/read_file.h"
 #include "tests/scene/dataset_test_util.h"
 
 namespace p2i::scene {
@@ -87,8 +88,7 @@ TEST_CASE("Capture reader names the problem in a broken folder", "[unit]") {
     CHECK_THROWS_WITH(ReadCapture(dir), Catch::Contains("colour_space"));
   }
   SECTION("future version") {
-    std::ifstream in(dir + "/manifest.yaml");
-    std::string text((std::istreambuf_iterator<char>(in)), {});
+    std::string text = p2i::testing::ReadFile(dir + "/manifest.yaml");
     text.replace(text.find("version: 1"), 10, "version: 9");
     std::ofstream(dir + "/manifest.yaml") << text;
     CHECK_THROWS_WITH(ReadCapture(dir), Catch::Contains("version 9"));

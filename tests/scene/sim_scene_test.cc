@@ -4,11 +4,11 @@
 #include <cmath>
 #include <fstream>
 #include <opencv2/imgproc.hpp>
-#include <sstream>
 #include <thread>
 
 #include "scene/sim_builtin_scenes.h"
 #include "scene/trajectory.h"
+#include "tests/read_file.h"
 #include "tests/test_paths.h"
 
 using p2i::scene::CameraInfo;
@@ -20,6 +20,8 @@ using p2i::scene::SimScene;
 using p2i::scene::SimSceneDescription;
 using p2i::scene::SimSensorOptions;
 using p2i::scene::SimTexture;
+
+using p2i::testing::ReadFile;
 
 namespace {
 
@@ -58,13 +60,6 @@ double GradientEnergy(const cv::Mat& rgb) {
   cv::Mat mag;
   cv::magnitude(gx, gy, mag);
   return cv::mean(mag)[0];
-}
-
-std::string ReadFile(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
 }
 
 // Looks from the arm zone of the small office towards the poster on the +y wall.

@@ -12,6 +12,7 @@
 #include "scene/capture.h"
 #include "scene/pose.h"
 #include "scene/trajectory_io.h"
+#include "tests/read_file.h"
 #include "tests/scene/dataset_test_util.h"
 
 namespace p2i::scene {
@@ -56,9 +57,7 @@ TEST_CASE("A capture manifest whose frame_count disagrees with its list is refus
     writer.Append(MakeSample(40, 30, 0, 1.0, Pose()));
     writer.Append(MakeSample(40, 30, 1, 2.0, Pose()));
   }
-  std::ifstream in(dir + "/manifest.yaml");
-  std::string text((std::istreambuf_iterator<char>(in)), {});
-  in.close();
+  std::string text = p2i::testing::ReadFile(dir + "/manifest.yaml");
   text.replace(text.find("frame_count: 2"), 14, "frame_count: 3");
   std::ofstream(dir + "/manifest.yaml") << text;
   CHECK_THROWS_WITH(ReadCapture(dir), Catch::Contains("frame_count is 3") &&

@@ -21,6 +21,7 @@
 #include "nodes/runtime/node.h"
 #include "nodes/runtime/shutdown.h"
 #include "nodes/slam_sink/message_conversion.h"
+#include "tests/read_file.h"
 #include "tests/slam_sink/sink_test_util.h"
 #include "tests/test_paths.h"
 
@@ -88,10 +89,7 @@ TEST_CASE("p2i_slam_sink writes published views, reports the lost one, flushes o
       unsetenv("P2I_RUN_DIR");
     }
   } reaper{pid};
-  auto stderr_text = [&] {
-    std::ifstream in(err_path);
-    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  };
+  auto stderr_text = [&] { return p2i::testing::ReadFile(err_path); };
 
   runtime::Node test("sink_test", Args({}));
   auto pub = test.Advertise<msgs::View>("views");

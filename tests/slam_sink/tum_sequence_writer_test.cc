@@ -15,6 +15,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "scene/tum_rgbd.h"
+#include "tests/read_file.h"
 #include "tests/slam_sink/sink_test_util.h"
 
 namespace p2i::slam_sink {
@@ -211,8 +212,7 @@ TEST_CASE("TumSequenceWriter refuses to mix runs unless appending, and never reu
   }
   const auto rgb = DataLines(dir / "rgb.txt");
   CHECK(rgb.size() == 2);
-  std::ifstream in(dir / "rgb.txt");
-  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string text = p2i::testing::ReadFile(dir / "rgb.txt");
   size_t headers = 0;
   for (size_t p = text.find("# color images"); p != std::string::npos;
        p = text.find("# color images", p + 1)) {

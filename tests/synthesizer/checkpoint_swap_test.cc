@@ -16,6 +16,7 @@
 #include "nodes/synthesizer/method_loader.h"
 #include "nodes/synthesizer/synthesizer_core.h"
 #include "tests/checkpoint_tamper.h"
+#include "tests/read_file.h"
 #include "tests/trainer/trainer_test_util.h"
 
 namespace fs = std::filesystem;
@@ -28,7 +29,7 @@ TEST_CASE("damaged checkpoints are refused at synthesizer start-up and on hot sw
   fs::create_directories(dir);
   const std::string good = (dir / "good.pt").string();
   model::WriteUntrainedCheckpoint(trainer::testing::TinyConfig(), good);
-  const std::string good_bytes = testing::ReadBytes(good);
+  const std::string good_bytes = testing::ReadFile(good);
   LoaderOptions lo;
   lo.threads = 1;
   SynthesizerCore core({}, MakeLoader("p2i", lo, nullptr), nullptr);

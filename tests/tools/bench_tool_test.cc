@@ -5,13 +5,13 @@
 
 #include <filesystem>
 #include <fstream>
-#include <sstream>
 #include <string>
 
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
 
 #include "tests/process_util.h"
+#include "tests/read_file.h"
 #include "tests/test_paths.h"
 
 namespace fs = std::filesystem;
@@ -69,12 +69,10 @@ TEST_CASE("p2i bench runs the tiny config end to end and resumes", "[integration
     CHECK(fs::exists(dir / "out" / "splits" / (std::string(s) + ".yaml")));
   }
   CHECK(fs::exists(dir / "out" / "stability.csv"));
-  std::ifstream rep(dir / "out" / "report.md");
-  std::stringstream report;
-  report << rep.rdbuf();
-  CHECK(report.str().find("| p2i | c | r32 | 1 |") != std::string::npos);
-  CHECK(report.str().find("Image strips") != std::string::npos);
-  CHECK(report.str().find("falls below") != std::string::npos);
+  const std::string report = p2i::testing::ReadFile(dir / "out" / "report.md");
+  CHECK(report.find("| p2i | c | r32 | 1 |") != std::string::npos);
+  CHECK(report.find("Image strips") != std::string::npos);
+  CHECK(report.find("falls below") != std::string::npos);
 
   // A second run resumes: nothing is recomputed, the rows stay.
   const std::string again = p2i::testing::RunCommand(cmd, &code);
@@ -84,12 +82,7 @@ TEST_CASE("p2i bench runs the tiny config end to end and resumes", "[integration
   CHECK(again.find("training") == std::string::npos);
 
   // Bad config: refused at start-up naming the key and the file.
-  {
-    std::ifstream in(config);
-    std::stringstream text;
-    text << in.rdbuf();
-    std::ofstream(dir / "bad.yaml") << text.str() << "treads: 2\n";
-  }
+  std::ofstream(dir / "bad.yaml") << p2i::testing::ReadFile(config) << "treads: 2\n";
   const std::string bad = p2i::testing::RunCommand(
       p2i + " bench " + (dir / "bad.yaml").string() + " --out " + (dir / "bad").string() + " 2>&1", &code);
   INFO(bad);

@@ -13,20 +13,18 @@
 #include <catch2/catch.hpp>
 
 #include "tests/process_util.h"
+#include "tests/read_file.h"
 #include "tests/test_paths.h"
 
 namespace fs = std::filesystem;
 
+using p2i::testing::ReadFile;
+
 namespace {
 
-std::string Slurp(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
+std::string Source(const std::string& rel) {
+  return ReadFile(fs::path(p2i::testing::SourceDir()) / rel);
 }
-
-std::string Source(const std::string& rel) { return Slurp(fs::path(p2i::testing::SourceDir()) / rel); }
 
 }  // namespace
 
@@ -45,7 +43,7 @@ TEST_CASE("docs name no build folder but build/", "[unit]") {
   for (const auto& e : fs::directory_iterator(fs::path(p2i::testing::SourceDir()) / "docs"))
     if (e.path().extension() == ".md") docs.push_back(e.path());
   for (const auto& d : docs) {
-    std::istringstream lines(Slurp(d));
+    std::istringstream lines(ReadFile(d));
     std::string line;
     int n = 0;
     while (std::getline(lines, line)) {

@@ -6,31 +6,25 @@
 
 #include <filesystem>
 #include <fstream>
-#include <sstream>
 #include <string>
 
 #include <catch2/catch.hpp>
 
 #include "nodes/runtime/curve_auth.h"
 #include "tests/process_util.h"
+#include "tests/read_file.h"
 #include "tests/skip.h"
 #include "tests/temp_dir.h"
 #include "tests/test_paths.h"
 
 namespace fs = std::filesystem;
 using p2i::runtime::ReadKeyFile;
+using p2i::testing::ReadFile;
 
 namespace {
 
 std::string Keygen(const std::string& args, int* code) {
   return p2i::testing::RunCommand(p2i::testing::BinDir() + "/p2i keygen " + args + " 2>&1", code);
-}
-
-std::string Slurp(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
 }
 
 int Mode(const std::string& path) {
@@ -63,12 +57,13 @@ TEST_CASE("p2i keygen writes a pair, refuses to overwrite without --force", "[in
   CHECK_THAT(made, Catch::Contains(pair.public_z85));
 
   // Again without --force: usage error (2), the file and the flag named, nothing changed.
-  const std::string key_before = Slurp(dir + "/robot.key"), pub_before = Slurp(dir + "/robot.pub");
+  const std::string key_before = ReadFile(dir + "/robot.key");
+  const std::string pub_before = ReadFile(dir + "/robot.pub");
   const std::string refused = Keygen("robot --dir " + dir, &code);
   CHECK(code == 2);
   CHECK_THAT(refused, Catch::Contains(dir + "/robot.key") && Catch::Contains("--force"));
-  CHECK(Slurp(dir + "/robot.key") == key_before);
-  CHECK(Slurp(dir + "/robot.pub") == pub_before);
+  CHECK(ReadFile(dir + "/robot.key") == key_before);
+  CHECK(ReadFile(dir + "/robot.pub") == pub_before);
 
   // Only NAME.pub there (e.g. another host's public key copied in): kept as well.
   std::ofstream(dir + "/hostb.pub") << "public " << pair.public_z85 << "\n";
@@ -103,7 +98,7 @@ TEST_CASE("p2i keygen leaves no half-written key when writing fails", "[integrat
   CHECK(code == 1);
   CHECK_THAT(out, Catch::Contains(tmp / "stuck.key"));
   CHECK(fs::is_directory(tmp / "stuck.key"));
-  CHECK(Slurp(tmp / "stuck.pub") == "old\n");  // the .pub still matches whatever was there
+  CHECK(ReadFile(tmp / "stuck.pub") == "old\n");  // the .pub still matches whatever was there
   CHECK_FALSE(AnyTmp(tmp.path()));
   // The library call alone: same guarantee.
   const auto k = p2i::runtime::GenerateCurveKeyPair();
@@ -121,7 +116,7 @@ TEST_CASE("p2i keygen --init keeps an existing key and completes the directory",
   REQUIRE(code == 0);
   const auto self = ReadKeyFile(dir + "/self.key");
   CHECK(ReadKeyFile(dir + "/self.pub").public_z85 == self.public_z85);
-  CHECK(Slurp(dir + "/authorized_keys").find(self.public_z85) != std::string::npos);
+  CHECK(ReadFile(dir + "/authorized_keys").find(self.public_z85) != std::string::npos);
   CHECK(Mode(dir) == 0700);
   fs::remove(dir + "/self.pub");
   const std::string again = Keygen("--init " + dir, &code);
@@ -131,6 +126,6 @@ TEST_CASE("p2i keygen --init keeps an existing key and completes the directory",
   CHECK(ReadKeyFile(dir + "/self.key").public_z85 == self.public_z85);
   CHECK(ReadKeyFile(dir + "/self.pub").public_z85 == self.public_z85);
   // authorized_keys lists the key once, not once per --init.
-  const std::string auth = Slurp(dir + "/authorized_keys");
+  const std::string auth = ReadFile(dir + "/authorized_keys");
   CHECK(auth.find(self.public_z85) == auth.rfind(self.public_z85));
 }

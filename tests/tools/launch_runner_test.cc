@@ -20,6 +20,7 @@
 
 #include <catch2/catch.hpp>
 
+#include "tests/read_file.h"
 #include "tests/temp_dir.h"
 #include "tests/test_paths.h"
 
@@ -320,8 +321,7 @@ TEST_CASE("p2i launch output: log writes to <log-dir>/<name>.log only", "[integr
   INFO(launcher.out() << launcher.err());
   CHECK_THAT(launcher.out(), !Catch::Contains("[quiet]"));
   CHECK_THAT(launcher.out(), Catch::Contains("[chatty] line 0"));
-  std::ifstream quiet(logs + "/quiet.log");
-  const std::string text((std::istreambuf_iterator<char>(quiet)), std::istreambuf_iterator<char>());
+  const std::string text = p2i::testing::ReadFile(logs + "/quiet.log");
   CHECK_THAT(text, Catch::Contains("line 1\n"));
   CHECK_THAT(text, Catch::Contains("done\n"));  // stderr goes to the log too
   CHECK(CountLines(logs + "/chatty.log") >= 2);
