@@ -9,6 +9,7 @@
 namespace p2i::scene {
 namespace {
 
+// long-function: generated table of the scene files
 const std::map<std::string, std::string>& Scenes() {
   static const auto* const kScenes = new std::map<std::string, std::string>{
       {"small_office", R"p2i_yaml(# Small office (6 m x 5 m x 2.8 m), like the smaller room of the P2I-NET paper's CP2V^2 dataset.

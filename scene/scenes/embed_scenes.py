@@ -6,6 +6,7 @@ out = ['/// @file sim_builtin_scenes.cc',
        '/// (python3 scene/scenes/embed_scenes.py); tests/scene/sim_scene_test.cc checks both agree.',
        '#include "scene/sim_builtin_scenes.h"', '', '#include <map>', '#include <stdexcept>', '',
        'namespace p2i::scene {', 'namespace {', '',
+       '// long-function: generated table of the scene files',
        'const std::map<std::string, std::string>& Scenes() {',
        '  static const auto* const kScenes = new std::map<std::string, std::string>{']
 for n in names:
