@@ -74,6 +74,8 @@ std::map<std::string, uint64_t> WaitCounter(runtime::RawSubscriber* status, cons
   return out;
 }
 
+// long-function: one scenario: one fake camera and node through three pose phases (none,
+// streaming, stopped); each phase's counts start from the ones the previous phase left.
 TEST_CASE("aravis backend over GigE Vision (arv-fake-gv-camera on 127.0.0.1): frames carry "
           "poses matched by stamp, frames without poses are dropped and counted",
           "[integration]") {

@@ -63,6 +63,8 @@ bool WaitUntil(const std::function<bool()>& cond, double limit_s) {
 
 }  // namespace
 
+// long-function: one scenario: a launch killed with -9, its orphaned nodes reaped, then
+// the next launch cleaning up what the killed one left; each step needs the previous one's state.
 TEST_CASE("kill -9 of p2i launch: nodes shut down cleanly at once, the next launch cleans up",
           "[integration]") {
   // Orphaned nodes are re-parented to this process, so it can reap them and see how they ended.

@@ -83,6 +83,8 @@ std::vector<std::pair<std::string, msgs::WireMessage>> BadMessages(Injector* inj
   return out;
 }
 
+// long-function: one scenario on one launched graph: malformed input on every topic and
+// service, then valid traffic through the same nodes; the totals count every injection before.
 TEST_CASE("launched graph: malformed messages on every topic and service are dropped and "
           "counted, and the nodes keep serving valid traffic",
           "[integration]") {

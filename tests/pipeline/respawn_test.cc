@@ -46,6 +46,8 @@ bool RenderOk(RenderClient* client, const msgs::pb::RenderRequest& request,
          reply->images.size() == 2u * request.poses_size();
 }
 
+// long-function: one scenario on one launched graph across a synthesizer kill and
+// respawn; the sink's accounting of lost and kept views spans both processes.
 TEST_CASE("launched graph: the synthesizer is killed and respawned, clients retry, the sink "
           "accounts for lost views and keeps everything it acknowledged",
           "[integration]") {

@@ -43,6 +43,8 @@ class NoRunDirExport {
 
 }  // namespace
 
+// long-function: one scenario: one launch without exports found in turn by record -a,
+// the Foxglove bridge and the Python client (one launch start-up shared by the three).
 TEST_CASE("record -a, the Foxglove bridge and the Python client find a launch without exports",
           "[integration]") {
   using namespace p2i::testing;

@@ -51,6 +51,8 @@ msgs::View ToView(const SinkFrame& f) {
 
 runtime::NodeArgs Args(const std::vector<std::string>& a) { return runtime::NodeArgs::Parse(a); }
 
+// long-function: one scenario on one sink process: views in (one lost), SIGTERM, flush;
+// the files and the loss report checked at the end are what the steps before sent.
 TEST_CASE("p2i_slam_sink writes published views, reports the lost one, flushes on SIGTERM",
           "[integration]") {
   runtime::Shutdown::ResetForTesting();

@@ -30,6 +30,8 @@ namespace {
 using p2i::testing::Process;
 using runtime::testing::ScopedRunDir;
 
+// long-function: one scenario on one synthesizer process (start-up renders its training frames
+// once): the render service, a refused request, then topic mode, the node serving throughout.
 TEST_CASE("p2i_synthesizer serves nearest-keyframe views over the render service and topics",
           "[integration]") {
   ScopedRunDir run_dir;

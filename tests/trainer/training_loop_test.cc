@@ -16,6 +16,8 @@
 using namespace p2i;
 using namespace p2i::trainer;
 
+// long-function: one scenario on one work dir: rounds on a growing buffer, a restarted loop,
+// a warm start; each step continues the versions and steps the previous one left.
 TEST_CASE("TrainingLoop: rounds on a growing buffer publish loadable, increasing versions",
           "[slow]") {
   const std::string dir = trainer::testing::TempDir("loop");
