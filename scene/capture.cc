@@ -169,9 +169,18 @@ bool IsCaptureFolder(const std::string& folder) {
   }
 }
 
-DatasetIndex ReadCapture(const std::string& folder) {
-  const fs::path dir(folder);
-  const std::string manifest_path = (dir / "manifest.yaml").string();
+namespace {
+
+/// root[key], or an error naming the manifest and the missing key.
+YAML::Node RequireKey(const YAML::Node& root, const std::string& manifest_path, const char* key) {
+  if (!root[key]) {
+    throw std::runtime_error("'" + manifest_path + "': missing key '" + key + "'");
+  }
+  return root[key];
+}
+
+/// The parsed manifest.yaml of `folder`: only known keys, this format, this version.
+YAML::Node LoadCaptureManifest(const std::string& folder, const std::string& manifest_path) {
   if (!fs::exists(manifest_path)) {
     throw std::runtime_error("'" + folder + "' is not a p2i capture folder: no manifest.yaml");
   }
@@ -189,70 +198,64 @@ DatasetIndex ReadCapture(const std::string& folder) {
       throw std::runtime_error("'" + manifest_path + "': unknown key '" + key + "'");
     }
   }
-  const auto require = [&](const char* key) {
-    if (!root[key]) {
-      throw std::runtime_error("'" + manifest_path + "': missing key '" + key + "'");
-    }
-    return root[key];
-  };
-  if (require("format").as<std::string>() != kFormat) {
+  if (RequireKey(root, manifest_path, "format").as<std::string>() != kFormat) {
     throw std::runtime_error("'" + manifest_path + "': format is '" +
                              root["format"].as<std::string>() + "', expected '" + kFormat + "'");
   }
-  const int version = require("version").as<int>();
+  const int version = RequireKey(root, manifest_path, "version").as<int>();
   if (version != kVersion) {
     throw std::runtime_error("'" + manifest_path + "': version " + std::to_string(version) +
                              " is not supported (this build reads version " +
                              std::to_string(kVersion) + ")");
   }
-  DepthEncoding encoding;
-  const YAML::Node depth = require("depth");
-  encoding.scale = depth["scale"] ? depth["scale"].as<double>() : 0.001;
-  encoding.invalid_value = depth["invalid"] ? depth["invalid"].as<uint16_t>() : 0;
-  const CameraInfo camera =
-      CameraInfo::FromYamlFile((dir / require("camera_info").as<std::string>()).string());
-  const std::string poses_path = (dir / require("poses").as<std::string>()).string();
+  return root;
+}
 
-  // poses.txt: line k belongs to listed frame k.
+/// poses.txt (TUM lines, '#' comments): line k belongs to listed frame k.
+std::vector<StampedPose> ReadCapturePoses(const std::string& poses_path) {
   std::vector<StampedPose> poses;
-  {
-    std::ifstream in(poses_path);
-    if (!in) throw std::runtime_error("cannot open '" + poses_path + "'");
-    std::string line;
-    int number = 0;
-    while (std::getline(in, line)) {
-      ++number;
-      if (line.empty() || line[0] == '#') continue;
-      StampedPose p;
-      try {
-        p.pose = Pose::FromTumLine(line, &p.stamp);
-      } catch (const std::exception& e) {
-        throw std::runtime_error("'" + poses_path + "' line " + std::to_string(number) + ": " +
-                                 e.what());
-      }
-      poses.push_back(p);
-    }
-  }
-  const std::string seq = fs::absolute(dir).lexically_normal().filename().string();
-  const YAML::Node frames = require("frames");
-  {
-    long long count = -1;
+  std::ifstream in(poses_path);
+  if (!in) throw std::runtime_error("cannot open '" + poses_path + "'");
+  std::string line;
+  int number = 0;
+  while (std::getline(in, line)) {
+    ++number;
+    if (line.empty() || line[0] == '#') continue;
+    StampedPose p;
     try {
-      count = require("frame_count").as<long long>();
-    } catch (const YAML::Exception&) {
+      p.pose = Pose::FromTumLine(line, &p.stamp);
+    } catch (const std::exception& e) {
+      throw std::runtime_error("'" + poses_path + "' line " + std::to_string(number) + ": " +
+                               e.what());
     }
-    if (count < 0 || static_cast<size_t>(count) != frames.size()) {
-      throw std::runtime_error("'" + manifest_path + "': frame_count is " +
-                               require("frame_count").as<std::string>() + " but 'frames' lists " +
-                               std::to_string(frames.size()) +
-                               " (a damaged or hand-edited manifest; make them agree)");
-    }
+    poses.push_back(p);
   }
-  if (frames.size() > poses.size()) {
-    throw std::runtime_error("'" + poses_path + "' has " + std::to_string(poses.size()) +
-                             " poses but '" + manifest_path + "' lists " +
-                             std::to_string(frames.size()) + " frames");
+  return poses;
+}
+
+/// The manifest's frame_count must be the number of entries in its 'frames'.
+void CheckFrameCount(const YAML::Node& root, const std::string& manifest_path,
+                     const YAML::Node& frames) {
+  long long count = -1;
+  try {
+    count = RequireKey(root, manifest_path, "frame_count").as<long long>();
+  } catch (const YAML::Exception&) {
   }
+  if (count < 0 || static_cast<size_t>(count) != frames.size()) {
+    throw std::runtime_error("'" + manifest_path + "': frame_count is " +
+                             RequireKey(root, manifest_path, "frame_count").as<std::string>() +
+                             " but 'frames' lists " + std::to_string(frames.size()) +
+                             " (a damaged or hand-edited manifest; make them agree)");
+  }
+}
+
+/// One FrameRef per listed frame, with pose k of poses.txt (its stamp must match) and the
+/// image files checked to exist.
+std::vector<FrameRef> CaptureFrameRefs(const fs::path& dir, const YAML::Node& frames,
+                                       const std::vector<StampedPose>& poses,
+                                       const std::string& manifest_path,
+                                       const std::string& poses_path) {
+  const std::string seq = fs::absolute(dir).lexically_normal().filename().string();
   std::vector<FrameRef> refs;
   for (size_t k = 0; k < frames.size(); ++k) {
     const YAML::Node f = frames[k];
@@ -275,7 +278,33 @@ DatasetIndex ReadCapture(const std::string& folder) {
     }
     refs.push_back(std::move(r));
   }
-  return DatasetIndex(camera, encoding, std::move(refs));
+  return refs;
+}
+
+}  // namespace
+
+DatasetIndex ReadCapture(const std::string& folder) {
+  const fs::path dir(folder);
+  const std::string manifest_path = (dir / "manifest.yaml").string();
+  const YAML::Node root = LoadCaptureManifest(folder, manifest_path);
+  DepthEncoding encoding;
+  const YAML::Node depth = RequireKey(root, manifest_path, "depth");
+  encoding.scale = depth["scale"] ? depth["scale"].as<double>() : 0.001;
+  encoding.invalid_value = depth["invalid"] ? depth["invalid"].as<uint16_t>() : 0;
+  const CameraInfo camera = CameraInfo::FromYamlFile(
+      (dir / RequireKey(root, manifest_path, "camera_info").as<std::string>()).string());
+  const std::string poses_path =
+      (dir / RequireKey(root, manifest_path, "poses").as<std::string>()).string();
+  const std::vector<StampedPose> poses = ReadCapturePoses(poses_path);
+  const YAML::Node frames = RequireKey(root, manifest_path, "frames");
+  CheckFrameCount(root, manifest_path, frames);
+  if (frames.size() > poses.size()) {
+    throw std::runtime_error("'" + poses_path + "' has " + std::to_string(poses.size()) +
+                             " poses but '" + manifest_path + "' lists " +
+                             std::to_string(frames.size()) + " frames");
+  }
+  return DatasetIndex(camera, encoding, CaptureFrameRefs(dir, frames, poses, manifest_path,
+                                                         poses_path));
 }
 
 }  // namespace p2i::scene

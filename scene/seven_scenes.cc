@@ -6,6 +6,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <regex>
 #include <stdexcept>
 
@@ -92,13 +93,12 @@ CameraInfo ReadIntrinsicsMatrixFile(const std::string& path, int width, int heig
   return CameraInfo::Pinhole(width, height, k[0], k[4], k[2], k[5]);
 }
 
-DatasetIndex ReadSevenScenes(const std::string& root, const SevenScenesOptions& options) {
-  options.Validate();
+namespace {
+
+/// Which sequence folders: options.sequences when given, else the root itself when it holds
+/// frames, else its seq-* children (sorted).
+std::vector<fs::path> SequenceDirs(const std::string& root, const SevenScenesOptions& options) {
   const fs::path root_path(root);
-  if (!fs::is_directory(root_path)) {
-    throw std::runtime_error("7-Scenes folder '" + root + "' does not exist or is not a folder");
-  }
-  // Which sequence folders: the root itself when it holds frames, else its seq-* children.
   std::vector<fs::path> seq_dirs;
   if (!options.sequences.empty()) {
     for (const std::string& s : options.sequences) {
@@ -122,37 +122,47 @@ DatasetIndex ReadSevenScenes(const std::string& root, const SevenScenesOptions& 
     throw std::runtime_error("7-Scenes folder '" + root +
                              "' has no seq-* folders and no frame-*.pose.txt files");
   }
+  return seq_dirs;
+}
 
+/// One sequence folder's frames in frame-number order, each with its pose read and its colour
+/// and depth files checked to exist.
+std::vector<FrameRef> ReadSequenceFrames(const fs::path& dir, double frame_rate) {
+  const std::string seq = fs::absolute(dir).lexically_normal().filename().string();
+  const auto list = ListFrames(dir);
+  if (list.empty()) {
+    throw std::runtime_error("7-Scenes sequence '" + dir.string() +
+                             "' has no frame-NNNNNN.pose.txt files");
+  }
   std::vector<FrameRef> frames;
-  for (const fs::path& dir : seq_dirs) {
-    const std::string seq = fs::absolute(dir).lexically_normal().filename().string();
-    const auto list = ListFrames(dir);
-    if (list.empty()) {
-      throw std::runtime_error("7-Scenes sequence '" + dir.string() +
-                               "' has no frame-NNNNNN.pose.txt files");
-    }
-    for (const auto& [number, stem] : list) {
-      FrameRef f;
-      f.sequence = seq;
-      f.id = seq + "/" + stem;
-      f.stamp = static_cast<double>(number) / options.frame_rate;
-      f.pose = ReadSevenScenesPose((dir / (stem + ".pose.txt")).string());
-      f.rgb_path = (dir / (stem + ".color.png")).string();
-      f.depth_path = (dir / (stem + ".depth.png")).string();
-      for (const std::string& p : {f.rgb_path, f.depth_path}) {
-        if (!fs::exists(p)) {
-          throw std::runtime_error("7-Scenes frame '" + f.id + "' has a pose but no '" + p + "'");
-        }
+  for (const auto& [number, stem] : list) {
+    FrameRef f;
+    f.sequence = seq;
+    f.id = seq + "/" + stem;
+    f.stamp = static_cast<double>(number) / frame_rate;
+    f.pose = ReadSevenScenesPose((dir / (stem + ".pose.txt")).string());
+    f.rgb_path = (dir / (stem + ".color.png")).string();
+    f.depth_path = (dir / (stem + ".depth.png")).string();
+    for (const std::string& p : {f.rgb_path, f.depth_path}) {
+      if (!fs::exists(p)) {
+        throw std::runtime_error("7-Scenes frame '" + f.id + "' has a pose but no '" + p + "'");
       }
-      frames.push_back(std::move(f));
     }
+    frames.push_back(std::move(f));
   }
+  return frames;
+}
 
-  // Image size from the first colour image's pixels (one decode; calibration files may omit it).
-  const cv::Mat first = cv::imread(frames.front().rgb_path, cv::IMREAD_COLOR);
+/// The calibration: options.camera_info_file, else root/camera_info.yaml, else
+/// root/camera-intrinsics.txt, else the dataset's nominal 585 px pinhole; its size must match
+/// the first colour image's pixels (one decode; calibration files may omit the size).
+CameraInfo SevenScenesCamera(const std::string& root, const SevenScenesOptions& options,
+                             const std::string& first_rgb_path) {
+  const cv::Mat first = cv::imread(first_rgb_path, cv::IMREAD_COLOR);
   if (first.empty()) {
-    throw std::runtime_error("cannot read colour image '" + frames.front().rgb_path + "'");
+    throw std::runtime_error("cannot read colour image '" + first_rgb_path + "'");
   }
+  const fs::path root_path(root);
   CameraInfo camera;
   const fs::path yaml = root_path / "camera_info.yaml";
   const fs::path txt = root_path / "camera-intrinsics.txt";
@@ -169,10 +179,27 @@ DatasetIndex ReadSevenScenes(const std::string& root, const SevenScenesOptions& 
   if (camera.image_width != first.cols || camera.image_height != first.rows) {
     throw std::runtime_error("calibration for '" + root + "' is for " +
                              std::to_string(camera.image_width) + "x" +
-                             std::to_string(camera.image_height) + " but '" +
-                             frames.front().rgb_path + "' is " + std::to_string(first.cols) + "x" +
+                             std::to_string(camera.image_height) + " but '" + first_rgb_path +
+                             "' is " + std::to_string(first.cols) + "x" +
                              std::to_string(first.rows));
   }
+  return camera;
+}
+
+}  // namespace
+
+DatasetIndex ReadSevenScenes(const std::string& root, const SevenScenesOptions& options) {
+  options.Validate();
+  const fs::path root_path(root);
+  if (!fs::is_directory(root_path)) {
+    throw std::runtime_error("7-Scenes folder '" + root + "' does not exist or is not a folder");
+  }
+  std::vector<FrameRef> frames;
+  for (const fs::path& dir : SequenceDirs(root, options)) {
+    std::vector<FrameRef> seq = ReadSequenceFrames(dir, options.frame_rate);
+    std::move(seq.begin(), seq.end(), std::back_inserter(frames));
+  }
+  const CameraInfo camera = SevenScenesCamera(root, options, frames.front().rgb_path);
   return DatasetIndex(camera, options.depth, std::move(frames));
 }
 
