@@ -201,6 +201,44 @@ bool McapReader::HandleRecord(uint8_t op, const uint8_t* body, size_t n, const M
   }
 }
 
+std::string McapReader::ScanChunk(const uint8_t* body, size_t len, uint64_t at,
+                                  const MessageFn* fn, McapSummary* into, bool* stop) {
+  Decoder c(body, len);
+  c.U64();
+  c.U64();
+  const uint64_t usize = c.U64();
+  const uint32_t crc = c.U32();
+  const std::string compression = c.Str();
+  const uint64_t csize = c.U64();
+  const uint8_t* records = c.ok() ? c.Take(static_cast<size_t>(csize)) : nullptr;
+  std::string why;
+  if (!records || usize > kMaxChunk) return "malformed Chunk record at byte " + std::to_string(at);
+  if (!Decompress(compression, records, static_cast<size_t>(csize), static_cast<size_t>(usize),
+                  &chunk_, &why)) {
+    return "corrupt Chunk at byte " + std::to_string(at) + ": " + why;
+  }
+  if (crc != 0 && Crc32(0, chunk_.data(), chunk_.size()) != crc) {
+    return "Chunk at byte " + std::to_string(at) + " fails its CRC (corrupt)";
+  }
+  if (!fn) {
+    into->compressed_bytes += csize;
+    into->uncompressed_bytes += usize;
+    ++into->chunks_by_compression[compression];
+    ++into->stats.chunk_count;
+  }
+  Decoder r(reinterpret_cast<const uint8_t*>(chunk_.data()), chunk_.size());
+  while (r.ok() && r.Remaining() > 0 && !*stop) {
+    const uint8_t rop = r.U8();
+    const uint64_t rlen = r.U64();
+    const uint8_t* rb =
+        r.ok() && rlen <= r.Remaining() ? r.Take(static_cast<size_t>(rlen)) : nullptr;
+    if (!rb || !HandleRecord(rop, rb, static_cast<size_t>(rlen), fn, into, stop)) {
+      return "malformed record inside the Chunk at byte " + std::to_string(at);
+    }
+  }
+  return "";
+}
+
 bool McapReader::Scan(const MessageFn* fn, McapSummary* into, std::string* error) {
   const uint64_t size = into->file_size;
   uint64_t at = data_start_;
@@ -250,44 +288,10 @@ bool McapReader::Scan(const MessageFn* fn, McapSummary* into, std::string* error
       const auto* body = reinterpret_cast<const uint8_t*>(buf_.data());
       bool stop = false;
       if (op == static_cast<uint8_t>(Op::kChunk)) {
-        Decoder c(body, static_cast<size_t>(len));
-        c.U64();
-        c.U64();
-        const uint64_t usize = c.U64();
-        const uint32_t crc = c.U32();
-        const std::string compression = c.Str();
-        const uint64_t csize = c.U64();
-        const uint8_t* records = c.ok() ? c.Take(static_cast<size_t>(csize)) : nullptr;
-        std::string why;
-        if (!records || usize > kMaxChunk) {
-          stop_at("malformed Chunk record at byte " + std::to_string(at));
+        const std::string why = ScanChunk(body, static_cast<size_t>(len), at, fn, into, &stop);
+        if (!why.empty()) {
+          stop_at(why);
           return true;
-        }
-        if (!Decompress(compression, records, static_cast<size_t>(csize),
-                        static_cast<size_t>(usize), &chunk_, &why)) {
-          stop_at("corrupt Chunk at byte " + std::to_string(at) + ": " + why);
-          return true;
-        }
-        if (crc != 0 && Crc32(0, chunk_.data(), chunk_.size()) != crc) {
-          stop_at("Chunk at byte " + std::to_string(at) + " fails its CRC (corrupt)");
-          return true;
-        }
-        if (!fn) {
-          into->compressed_bytes += csize;
-          into->uncompressed_bytes += usize;
-          ++into->chunks_by_compression[compression];
-          ++into->stats.chunk_count;
-        }
-        Decoder r(reinterpret_cast<const uint8_t*>(chunk_.data()), chunk_.size());
-        while (r.ok() && r.Remaining() > 0 && !stop) {
-          const uint8_t rop = r.U8();
-          const uint64_t rlen = r.U64();
-          const uint8_t* rb = r.ok() && rlen <= r.Remaining() ? r.Take(static_cast<size_t>(rlen))
-                                                              : nullptr;
-          if (!rb || !HandleRecord(rop, rb, static_cast<size_t>(rlen), fn, into, &stop)) {
-            stop_at("malformed record inside the Chunk at byte " + std::to_string(at));
-            return true;
-          }
         }
       } else if (!HandleRecord(op, body, static_cast<size_t>(len), fn, into, &stop)) {
         stop_at("malformed " + OpName(op) + " record at byte " + std::to_string(at));

@@ -58,9 +58,13 @@ class McapReader {
   /// Walks the data section from after the Header; `fn` may be null (summary building).
   bool Scan(const MessageFn* fn, McapSummary* into, std::string* error);
   /// Handles one Schema / Channel / Message record (top level or inside a chunk). Returns false
-  /// when `fn` asked to stop.
+  /// when the record is malformed; sets *stop when `fn` asked to stop.
   bool HandleRecord(uint8_t op, const uint8_t* body, size_t n, const MessageFn* fn,
                     McapSummary* into, bool* stop);
+  /// Decompresses the Chunk record `body` (at byte `at`), checks its CRC and handles the records
+  /// inside. Returns "" when the scan may go on, else why it stops there (malformed, corrupt).
+  std::string ScanChunk(const uint8_t* body, size_t len, uint64_t at, const MessageFn* fn,
+                        McapSummary* into, bool* stop);
 
   std::string path_;
   FILE* file_ = nullptr;

@@ -25,40 +25,68 @@ void PlayerOptions::Validate() const {
 
 Player::Player(PlayerOptions options) : options_(std::move(options)) { options_.Validate(); }
 
-bool Player::Run(std::string* error, const PublishHook& on_publish) {
-  McapReader reader;
-  if (!reader.Open(options_.input, error)) return false;
-  const McapSummary& summary = reader.Summary();
-  // One publisher per p2i channel (schemas of other packages, e.g. foxglove.*, are views of
-  // the same data and are not republished).
-  struct Out {
-    const google::protobuf::Descriptor* type = nullptr;
-    std::unique_ptr<runtime::RawPublisher> pub;
-    bool latched = false;
-  };
-  std::map<uint16_t, Out> outs;
+namespace {
+
+/// The publisher of one recorded channel.
+struct PlayOut {
+  const google::protobuf::Descriptor* type = nullptr;
+  std::unique_ptr<runtime::RawPublisher> pub;
+  bool latched = false;
+};
+
+/// One publisher per p2i channel of the file (restricted to options.topics when given); schemas
+/// of other packages, e.g. foxglove.*, are views of the same data and are not republished.
+std::map<uint16_t, PlayOut> MakePublishers(const McapSummary& summary,
+                                           const PlayerOptions& options) {
+  std::map<uint16_t, PlayOut> outs;
   for (const auto& [id, ch] : summary.channels) {
     const auto s = summary.schemas.find(ch.schema_id);
     if (s == summary.schemas.end() || s->second.encoding != "protobuf" ||
         s->second.name.rfind("p2i.msgs.pb.", 0) != 0)
       continue;
-    if (!options_.topics.empty() &&
-        std::find(options_.topics.begin(), options_.topics.end(), ch.topic) == options_.topics.end())
+    if (!options.topics.empty() &&
+        std::find(options.topics.begin(), options.topics.end(), ch.topic) == options.topics.end())
       continue;
     const auto* d = FindDescriptor(s->second.name);
     if (!d) continue;
-    Out o;
+    PlayOut o;
     o.type = d;
     runtime::PublisherOptions po;
-    o.latched = std::find(options_.latched_types.begin(), options_.latched_types.end(),
-                          s->second.name) != options_.latched_types.end();
+    o.latched = std::find(options.latched_types.begin(), options.latched_types.end(),
+                          s->second.name) != options.latched_types.end();
     po.latched = o.latched;
-    po.latch_period_s = options_.latch_period_s;
+    po.latch_period_s = options.latch_period_s;
     const auto meta = ch.metadata.find("p2i_type");
     o.pub = std::make_unique<runtime::RawPublisher>(
-        ch.topic, meta != ch.metadata.end() ? meta->second : d->name(), options_.node_name, po);
+        ch.topic, meta != ch.metadata.end() ? meta->second : d->name(), options.node_name, po);
     outs.emplace(id, std::move(o));
   }
+  return outs;
+}
+
+/// Gives a recorded message a new seq and publish stamp from `pub` (a loop must not look like
+/// latched duplicates); capture stamps, frame ids and payload stay as recorded. False when its
+/// header cannot be read.
+bool Restamp(msgs::WireMessage* wire, runtime::RawPublisher* pub, const std::string& node_name) {
+  msgs::pb::HeaderOnly ho;
+  std::string header_error;
+  msgs::pb::Header h;
+  if (!msgs::PeekHeader(wire->header, &h, &header_error)) return false;
+  h.set_seq(pub->NextSeq());
+  h.set_publish_stamp_ns(runtime::NowNs());
+  h.set_publisher(node_name);
+  *ho.mutable_header() = h;
+  wire->header += ho.SerializeAsString();  // protobuf merge: the later header fields win
+  return true;
+}
+
+}  // namespace
+
+bool Player::Run(std::string* error, const PublishHook& on_publish) {
+  McapReader reader;
+  if (!reader.Open(options_.input, error)) return false;
+  const McapSummary& summary = reader.Summary();
+  std::map<uint16_t, PlayOut> outs = MakePublishers(summary, options_);
   if (outs.empty()) {
     *error = options_.input + ": no p2i channel to play" +
              (options_.topics.empty() ? "" : " among the requested --topics");
@@ -104,20 +132,10 @@ bool Player::Run(std::string* error, const PublishHook& on_publish) {
             ++stats_.unreadable;
             return true;
           }
-          // New seq and publish stamp (a loop must not look like latched duplicates); capture
-          // stamps, frame ids and payload stay as recorded.
-          msgs::pb::HeaderOnly ho;
-          std::string header_error;
-          msgs::pb::Header h;
-          if (!msgs::PeekHeader(wire.header, &h, &header_error)) {
+          if (!Restamp(&wire, it->second.pub.get(), options_.node_name)) {
             ++stats_.unreadable;
             return true;
           }
-          h.set_seq(it->second.pub->NextSeq());
-          h.set_publish_stamp_ns(runtime::NowNs());
-          h.set_publisher(options_.node_name);
-          *ho.mutable_header() = h;
-          wire.header += ho.SerializeAsString();  // protobuf merge: the later header fields win
           it->second.pub->Publish(wire);
           ++stats_.published;
           if (on_publish) {
