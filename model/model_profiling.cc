@@ -111,6 +111,95 @@ double TimeTrainingStep(const P2iConfig& config, int phase, int steps, int threa
   return times[times.size() / 2];
 }
 
+namespace {
+
+/// The names of the sections StepSectionTimes measures, in its order.
+const std::vector<std::string>& StepSectionNames() {
+  static const std::vector<std::string> kNames = {"G forward",        "D fwd reals",
+                                                  "D fwd fakes (D)",  "L_D + D backward",
+                                                  "D Adam",           "D fwd fakes (G)",
+                                                  "L_G + G backward", "G Adam"};
+  return kNames;
+}
+
+/// One adversarial training step (the trainer's D step, then its G step), timed per section
+/// (StepSectionNames' order), in seconds.
+std::vector<double> StepSectionTimes(Networks& nets, const torch::Tensor& real,
+                                     const torch::Tensor& y, const LossWeights& w,
+                                     torch::optim::Adam& opt_g, torch::optim::Adam& opt_d,
+                                     bool freeze_d) {
+  std::vector<double> t;
+  auto tick = Clock::now();
+  auto lap = [&] {
+    const auto now = Clock::now();
+    t.push_back(Seconds(tick, now));
+    tick = now;
+  };
+  auto fake = nets.g->forward(y);
+  lap();
+  auto dr = nets.d->forward(real);
+  lap();
+  auto df = nets.d->forward(fake.detach());
+  lap();
+  auto dl = DiscriminatorLoss(dr, df, nets.d->MapPose(y), y, w);
+  opt_d.zero_grad();
+  dl.total.backward();
+  lap();
+  opt_d.step();
+  lap();
+  {
+    std::optional<FrozenScope> frozen_d;  // as the trainer's G step
+    if (freeze_d) frozen_d.emplace(*nets.d);
+    auto dg = nets.d->forward(fake);
+    lap();
+    auto gl = GeneratorLoss(dg, nets.d->MapPose(y), y, w);
+    opt_g.zero_grad();
+    gl.total.backward();
+    lap();
+  }
+  opt_g.step();
+  lap();
+  return t;
+}
+
+/// Seconds of D's attention forwards at their sizes (batch b), summed over `steps` runs after
+/// one warm-up.
+double AttentionSeconds(Networks& nets, const P2iConfig& config, int b, int steps) {
+  double att = 0.0;
+  int side = config.resolution, width = config.d_base_width;
+  for (size_t k = 0; k < nets.d->blocks->size(); ++k) {
+    side /= 2;
+    if (nets.d->attention_index_[k] >= 0) {
+      auto a = nets.d->attentions[nets.d->attention_index_[k]]->as<SelfAttention>();
+      auto x = torch::randn({b, width, side, side});
+      for (int i = 0; i <= steps; ++i) {
+        const auto t0 = Clock::now();
+        auto o = a->forward(x);
+        if (i > 0) att += Seconds(t0, Clock::now());
+      }
+    }
+    width = std::min(width * 2, config.d_max_width);
+  }
+  return att;
+}
+
+/// Seconds of the spectral-norm power iterations of all D's weights, summed over `steps` runs
+/// after one warm-up.
+double SpectralNormSeconds(Networks& nets, int steps) {
+  double sn = 0.0;
+  for (int i = 0; i <= steps; ++i) {
+    const auto t0 = Clock::now();
+    for (auto& m : nets.d->modules(/*include_self=*/false)) {
+      if (auto* c = m->as<SNConv2d>()) (void)c->EffectiveWeight();
+      if (auto* l = m->as<SNLinear>()) (void)l->EffectiveWeight();
+    }
+    if (i > 0) sn += Seconds(t0, Clock::now());
+  }
+  return sn;
+}
+
+}  // namespace
+
 StepProfile ProfileTrainingStep(const P2iConfig& config, int steps, int threads,
                                 bool freeze_d) {
   torch::set_num_threads(threads);
@@ -124,43 +213,10 @@ StepProfile ProfileTrainingStep(const P2iConfig& config, int steps, int threads,
   auto y = torch::rand({b, 7}) * 2 - 1;
   torch::optim::Adam opt_g(nets.g->parameters(), torch::optim::AdamOptions(1e-4));
   torch::optim::Adam opt_d(nets.d->parameters(), torch::optim::AdamOptions(1e-4));
-  const std::vector<std::string> names = {"G forward",        "D fwd reals",
-                                          "D fwd fakes (D)",  "L_D + D backward",
-                                          "D Adam",           "D fwd fakes (G)",
-                                          "L_G + G backward", "G Adam"};
+  const std::vector<std::string>& names = StepSectionNames();
   std::vector<double> acc(names.size(), 0.0);
   for (int i = 0; i <= steps; ++i) {
-    std::vector<double> t;
-    auto tick = Clock::now();
-    auto lap = [&] {
-      const auto now = Clock::now();
-      t.push_back(Seconds(tick, now));
-      tick = now;
-    };
-    auto fake = nets.g->forward(y);
-    lap();
-    auto dr = nets.d->forward(real);
-    lap();
-    auto df = nets.d->forward(fake.detach());
-    lap();
-    auto dl = DiscriminatorLoss(dr, df, nets.d->MapPose(y), y, w);
-    opt_d.zero_grad();
-    dl.total.backward();
-    lap();
-    opt_d.step();
-    lap();
-    {
-      std::optional<FrozenScope> frozen_d;  // as the trainer's G step
-      if (freeze_d) frozen_d.emplace(*nets.d);
-      auto dg = nets.d->forward(fake);
-      lap();
-      auto gl = GeneratorLoss(dg, nets.d->MapPose(y), y, w);
-      opt_g.zero_grad();
-      gl.total.backward();
-      lap();
-    }
-    opt_g.step();
-    lap();
+    const std::vector<double> t = StepSectionTimes(nets, real, y, w, opt_g, opt_d, freeze_d);
     if (i == 0) continue;  // warm-up
     for (size_t k = 0; k < acc.size(); ++k) acc[k] += t[k];
   }
@@ -169,31 +225,8 @@ StepProfile ProfileTrainingStep(const P2iConfig& config, int steps, int threads,
     out.total += acc[k] / std::max(1, steps);
   }
   // Apart: attention forward at its sizes, and the SN power iterations of D's weights.
-  double att = 0.0, sn = 0.0;
-  {
-    int side = r, width = config.d_base_width;
-    for (size_t k = 0; k < nets.d->blocks->size(); ++k) {
-      side /= 2;
-      if (nets.d->attention_index_[k] >= 0) {
-        auto a = nets.d->attentions[nets.d->attention_index_[k]]->as<SelfAttention>();
-        auto x = torch::randn({b, width, side, side});
-        for (int i = 0; i <= steps; ++i) {
-          const auto t0 = Clock::now();
-          auto o = a->forward(x);
-          if (i > 0) att += Seconds(t0, Clock::now());
-        }
-      }
-      width = std::min(width * 2, config.d_max_width);
-    }
-    for (int i = 0; i <= steps; ++i) {
-      const auto t0 = Clock::now();
-      for (auto& m : nets.d->modules(/*include_self=*/false)) {
-        if (auto* c = m->as<SNConv2d>()) (void)c->EffectiveWeight();
-        if (auto* l = m->as<SNLinear>()) (void)l->EffectiveWeight();
-      }
-      if (i > 0) sn += Seconds(t0, Clock::now());
-    }
-  }
+  const double att = AttentionSeconds(nets, config, b, steps);
+  const double sn = SpectralNormSeconds(nets, steps);
   out.sections.push_back({"(apart) attention fwd, all blocks, x3 per step", 3.0 * att / std::max(1, steps)});
   out.sections.push_back({"(apart) SN power iterations, x3 per step", 3.0 * sn / std::max(1, steps)});
   return out;
