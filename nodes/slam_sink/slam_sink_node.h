@@ -11,8 +11,8 @@
 
 namespace p2i::slam_sink {
 
-/// Parameters: out_dir, append, fsync, png_compression, write_associations, check, policy
-/// (flag|drop), write_real, odometry_method, max_translation_error_m, max_rotation_error_deg,
+/// Parameters (SlamSinkNodeOptions, slam_sink_options.h): out_dir, append, fsync,
+/// png_compression, write_associations, check, policy (flag|drop), write_real, odometry_method, max_translation_error_m, max_rotation_error_deg,
 /// min_coverage, min_valid_depth_fraction, min_depth_m, max_depth_m, max_baseline_m,
 /// max_baseline_deg, camera_info_file (ROS YAML of the views' camera; else the first message on
 /// camera_info_topic), views_topic ("views"), real_topic ("" = off), camera_info_topic
@@ -30,6 +30,12 @@ class SlamSinkNode : public runtime::Node {
   void OnShutdown() override;
 
  private:
+  // Start-up steps of the constructor, after the parameters.
+  void SubscribeViews(const std::string& topic);       // synthetic views -> OnFrame
+  void SubscribeRealFrames(const std::string& topic);  // real RGB-D frames -> OnFrame
+  void SubscribeCameraInfo(const std::string& topic);  // enables the check once calibrated
+  void StartSummaryTimer(double period_s);             // rewrites summary.json periodically
+
   void OnFrame(const SinkFrame& frame);
   void UpdateStatus();
 

@@ -6,6 +6,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include "nodes/runtime/parameters.h"
 #include "nodes/slam_sink/odometry_checker.h"
 #include "nodes/slam_sink/tum_sequence_writer.h"
 
@@ -26,6 +27,27 @@ struct SlamSinkOptions {
   static SlamSinkOptions FromYaml(const YAML::Node& node, const std::string& source);
   /// Throws std::invalid_argument naming the field.
   void Validate() const;
+};
+
+/// Every parameter of the p2i_slam_sink node (docs/SLAM_SINK.md): the sink's options and the
+/// node's topics, calibration file and summary period. Defaults in the field initialisers.
+struct SlamSinkNodeOptions {
+  SlamSinkOptions sink = SinkDefaults();  ///< out_dir defaults to "slam_sequence" here
+  std::string camera_info_file;  ///< ROS camera_info YAML of the views; "" = camera_info_topic
+  std::string views_topic = "views";              ///< View topic
+  std::string real_topic;                         ///< RgbdFrame topic of real frames; "" = off
+  std::string camera_info_topic = "camera_info";  ///< used without camera_info_file
+  double summary_period = 5.0;  ///< s between summary.json rewrites; 0 = at exit only
+
+  /// SlamSinkOptions' defaults with the node's output folder.
+  static SlamSinkOptions SinkDefaults();
+  /// Declares every parameter (name, type, the default of a default-constructed struct,
+  /// description) and returns the values supplied or the defaults. Throws runtime::StartupError
+  /// for a value of the wrong type.
+  static SlamSinkNodeOptions FromParameters(runtime::Parameters& params);
+  /// sink.Validate() (which SlamSink's constructor runs too); the node's own fields take any
+  /// value (summary_period <= 0: summary.json at exit only).
+  void Validate() const { sink.Validate(); }
 };
 
 }  // namespace p2i::slam_sink
