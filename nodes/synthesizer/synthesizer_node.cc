@@ -19,10 +19,18 @@ SynthesizerNode::SynthesizerNode(const runtime::NodeArgs& args)
   } catch (const std::invalid_argument& e) {
     throw runtime::StartupError(e.what());
   }
-  SynthesizerCoreOptions& core_options = options.core;
-  const std::string& checkpoint = options.checkpoint;
-  const std::string& dataset = options.dataset;
   ParametersDone();  // unknown parameters / --help stop here, before any data is loaded
+  StartCore(&options);
+  ServeRender();
+  if (options.topic_mode) StartTopicMode();
+  if (learned_) SubscribeModelVersions();
+  StartStatusTimer();
+}
+
+void SynthesizerNode::StartCore(SynthesizerOptions* options) {
+  SynthesizerCoreOptions& core_options = options->core;
+  const std::string& checkpoint = options->checkpoint;
+  const std::string& dataset = options->dataset;
   std::shared_ptr<const model::CoverageScorer> coverage;
   SynthesizerLoader loader;
   try {
@@ -30,8 +38,8 @@ SynthesizerNode::SynthesizerNode(const runtime::NodeArgs& args)
     core_options.method = method.name;  // an alias ("p2i_net") serves under the canonical name
     learned_ = method.learned;
     auto training = std::make_shared<const scene::RgbdDataset>(
-        LoadTrainingData(dataset, options.width, options.height, /*with_frames=*/!learned_,
-                         options.dataset_stride));
+        LoadTrainingData(dataset, options->width, options->height, /*with_frames=*/!learned_,
+                         options->dataset_stride));
     if (!training->frames.empty()) {
       std::vector<scene::Pose> poses;
       poses.reserve(training->frames.size());
@@ -39,7 +47,7 @@ SynthesizerNode::SynthesizerNode(const runtime::NodeArgs& args)
       coverage = std::make_shared<const model::CoverageScorer>(std::move(poses));
     }
     Log().info("training data '{}': {} frames", dataset, training->frames.size());
-    loader = MakeLoader(core_options.method, options.loader, training);
+    loader = MakeLoader(core_options.method, options->loader, training);
     core_ = std::make_unique<SynthesizerCore>(core_options, loader, coverage);
     core_->SetCountHook([this](const std::string& key, uint64_t n) { Count(key, n); });
     if (!learned_) {
@@ -56,7 +64,9 @@ SynthesizerNode::SynthesizerNode(const runtime::NodeArgs& args)
   } else {
     Log().info("method {}: waiting for a ModelVersion on model_version", core_options.method);
   }
+}
 
+void SynthesizerNode::ServeRender() {
   Serve<msgs::pb::RenderRequest, msgs::RenderReplyMsg>(
       "render", [this](const msgs::pb::RenderRequest& request, msgs::RenderReplyMsg* reply,
                        std::string*) {
@@ -65,31 +75,35 @@ SynthesizerNode::SynthesizerNode(const runtime::NodeArgs& args)
                                                            reply->meta.error());
         return true;  // refusals are replies (ok = false), not transport errors
       });
+}
 
-  if (options.topic_mode) {
-    views_pub_ = Advertise<msgs::View>("views");
-    topic_ = std::make_unique<TopicRenderer>(core_.get(), [this](msgs::View&& view) {
-      views_pub_->Publish(view);
-    });
-    runtime::SubscriberOptions sub_options;
-    sub_options.latest_only = true;
-    SubscribeRaw(
-        "planned_poses",
-        [this](msgs::WireMessage&& wire, const msgs::pb::Header& header) {
-          return OnPlannedPose(std::move(wire), header);
-        },
-        sub_options);
-  }
-  if (learned_) {
-    Subscribe<msgs::pb::ModelVersion>("model_version", [this](const msgs::pb::ModelVersion& mv) {
-      ModelSpec spec{mv.version(), mv.checkpoint_path(), core_->options().method,
-                     mv.poses_path()};
-      if (core_->SwapAsync(spec)) {
-        Log().info("loading model version {} from {} in the background", mv.version(),
-                   mv.checkpoint_path());
-      }
-    });
-  }
+void SynthesizerNode::StartTopicMode() {
+  views_pub_ = Advertise<msgs::View>("views");
+  topic_ = std::make_unique<TopicRenderer>(core_.get(), [this](msgs::View&& view) {
+    views_pub_->Publish(view);
+  });
+  runtime::SubscriberOptions sub_options;
+  sub_options.latest_only = true;
+  SubscribeRaw(
+      "planned_poses",
+      [this](msgs::WireMessage&& wire, const msgs::pb::Header& header) {
+        return OnPlannedPose(std::move(wire), header);
+      },
+      sub_options);
+}
+
+void SynthesizerNode::SubscribeModelVersions() {
+  Subscribe<msgs::pb::ModelVersion>("model_version", [this](const msgs::pb::ModelVersion& mv) {
+    ModelSpec spec{mv.version(), mv.checkpoint_path(), core_->options().method,
+                   mv.poses_path()};
+    if (core_->SwapAsync(spec)) {
+      Log().info("loading model version {} from {} in the background", mv.version(),
+                 mv.checkpoint_path());
+    }
+  });
+}
+
+void SynthesizerNode::StartStatusTimer() {
   AddTimer(std::chrono::milliseconds(500), [this] {
     const std::string swap_error = core_->LastSwapError();
     if (swap_error != last_swap_error_) {

@@ -11,6 +11,8 @@
 
 namespace p2i::nodes {
 
+struct SynthesizerOptions;
+
 /// Serves "render" (RenderRequest -> RenderReplyMsg), renders planned poses from
 /// "planned_poses" (PoseRequest or PoseStamped, latest-only) onto "views" (View), and hot-swaps
 /// models announced on "model_version" (learned methods). See docs/SYNTHESIZER.md for the
@@ -27,6 +29,13 @@ class SynthesizerNode : public runtime::Node {
   void OnShutdown() override;
 
  private:
+  // Start-up steps of the constructor, after the parameters are read and validated.
+  void StartCore(SynthesizerOptions* options);  // training data, loader, core, first model
+  void ServeRender();                           // the render service
+  void StartTopicMode();                        // planned_poses -> views
+  void SubscribeModelVersions();                // hot swaps (learned methods)
+  void StartStatusTimer();                      // model_version / has_model, swap errors
+
   bool OnPlannedPose(msgs::WireMessage&& wire, const msgs::pb::Header& header);
 
   std::unique_ptr<SynthesizerCore> core_;
