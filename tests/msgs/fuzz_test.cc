@@ -165,22 +165,10 @@ Blob RandomBlob(testing::Samples& s, size_t max) {
   return b;
 }
 
-/// Applies `mutation` to `wire` (of type `type`). Returns false if it does not apply to this
-/// message (e.g. no quaternion in it); the caller then picks another.
-bool Mutate(Mutation mutation, pb::MsgType type, testing::Samples& s, WireMessage* wire) {
-  auto meta = NewMessage(type);
-  REQUIRE(meta->ParseFromString(wire->header));
-  auto reserialize = [&] {
-    wire->header.clear();
-    gpb::io::StringOutputStream bytes(&wire->header);
-    gpb::io::CodedOutputStream coded(&bytes);
-    coded.SetSerializationDeterministic(true);  // map order is random per process otherwise
-    meta->SerializeToCodedStream(&coded);
-  };
-  auto* header = static_cast<pb::Header*>(meta->GetReflection()->MutableMessage(
-      meta.get(), meta->GetDescriptor()->FindFieldByNumber(1)));
+/// The mutations of the frames themselves (kRandomBytes .. kBlobSize): header bytes and blobs.
+/// Returns false if `mutation` does not apply to `wire` (e.g. it has no blob).
+bool MutateFrames(Mutation mutation, testing::Samples& s, WireMessage* wire) {
   switch (mutation) {
-    case Mutation::kNone: return true;
     case Mutation::kRandomBytes: {
       std::string bytes(s.Int(0, 300), '\0');
       for (char& c : bytes) c = static_cast<char>(s.rng()());
@@ -221,67 +209,102 @@ bool Mutate(Mutation mutation, pb::MsgType type, testing::Samples& s, WireMessag
       b = std::make_shared<const Bytes>(n, 7);
       return true;
     }
-    case Mutation::kNonFinite: {
-      std::vector<std::pair<gpb::Message*, const gpb::FieldDescriptor*>> slots;
-      FindDoubleSlots(meta.get(), &slots);
-      if (slots.empty()) return false;
-      const auto& [m, fd] = slots[s.Int(0, static_cast<uint32_t>(slots.size() - 1))];
-      const double bad[] = {std::numeric_limits<double>::quiet_NaN(),
-                            std::numeric_limits<double>::infinity(),
-                            -std::numeric_limits<double>::infinity()};
-      m->GetReflection()->SetDouble(m, fd, bad[s.Int(0, 2)]);
-      reserialize();
-      return true;
-    }
+    default:
+      return false;
+  }
+}
+
+/// kNonFinite: NaN or +-inf in a random double field of `meta`.
+bool SetNonFinite(testing::Samples& s, gpb::Message* meta) {
+  std::vector<std::pair<gpb::Message*, const gpb::FieldDescriptor*>> slots;
+  FindDoubleSlots(meta, &slots);
+  if (slots.empty()) return false;
+  const auto& [m, fd] = slots[s.Int(0, static_cast<uint32_t>(slots.size() - 1))];
+  const double bad[] = {std::numeric_limits<double>::quiet_NaN(),
+                        std::numeric_limits<double>::infinity(),
+                        -std::numeric_limits<double>::infinity()};
+  m->GetReflection()->SetDouble(m, fd, bad[s.Int(0, 2)]);
+  return true;
+}
+
+/// kBadQuaternion / kNearQuaternion: one orientation of `meta` scaled out of / within tolerance.
+bool ScaleQuaternion(Mutation mutation, testing::Samples& s, gpb::Message* meta) {
+  std::vector<pb::Quaternion*> quats;
+  FindAll(meta, &quats);
+  if (quats.empty()) return false;
+  // Scales chosen well clear of the 1e-3 threshold on either side.
+  const double scale = mutation == Mutation::kNearQuaternion
+                           ? 1.0 + s.Uniform(-5e-4, 5e-4)
+                           : (s.Int(0, 1) ? s.Uniform(1.002, 3.0) : s.Uniform(0.0, 0.998));
+  pb::Quaternion* q = quats[s.Int(0, static_cast<uint32_t>(quats.size() - 1))];
+  q->set_x(q->x() * scale);
+  q->set_y(q->y() * scale);
+  q->set_z(q->z() * scale);
+  q->set_w(q->w() * scale);
+  return true;
+}
+
+/// kImageGeometry: a random width, height, step, encoding, blob_index or depth_scale in one
+/// ImageInfo of `meta`.
+bool BreakImageGeometry(testing::Samples& s, gpb::Message* meta) {
+  std::vector<pb::ImageInfo*> infos;
+  FindAll(meta, &infos);
+  if (infos.empty()) return false;
+  pb::ImageInfo* info = infos[s.Int(0, static_cast<uint32_t>(infos.size() - 1))];
+  switch (s.Int(0, 5)) {
+    case 0: info->set_width(s.Int(0, 1) ? 0 : s.Int(0, 40000)); break;
+    case 1: info->set_height(s.Int(0, 1) ? 0 : s.Int(0, 40000)); break;
+    case 2: info->set_step(s.Int(0, 200)); break;
+    case 3: info->set_encoding(static_cast<pb::Encoding>(s.Int(0, 7))); break;
+    case 4: info->set_blob_index(s.Int(0, 8)); break;
+    default: info->set_depth_scale(s.Uniform(-1, 1)); break;
+  }
+  return true;
+}
+
+/// The mutations of the decoded header message `meta` (of type `type`): kNonFinite ..
+/// kImageGeometry. Returns false if `mutation` does not apply (e.g. no quaternion in it).
+bool MutateFields(Mutation mutation, pb::MsgType type, testing::Samples& s, gpb::Message* meta) {
+  auto* header = static_cast<pb::Header*>(
+      meta->GetReflection()->MutableMessage(meta, meta->GetDescriptor()->FindFieldByNumber(1)));
+  switch (mutation) {
+    case Mutation::kNonFinite:
+      return SetNonFinite(s, meta);
     case Mutation::kBadQuaternion:
-    case Mutation::kNearQuaternion: {
-      std::vector<pb::Quaternion*> quats;
-      FindAll(meta.get(), &quats);
-      if (quats.empty()) return false;
-      // Scales chosen well clear of the 1e-3 threshold on either side.
-      const double scale = mutation == Mutation::kNearQuaternion
-                               ? 1.0 + s.Uniform(-5e-4, 5e-4)
-                               : (s.Int(0, 1) ? s.Uniform(1.002, 3.0) : s.Uniform(0.0, 0.998));
-      pb::Quaternion* q = quats[s.Int(0, static_cast<uint32_t>(quats.size() - 1))];
-      q->set_x(q->x() * scale);
-      q->set_y(q->y() * scale);
-      q->set_z(q->z() * scale);
-      q->set_w(q->w() * scale);
-      reserialize();
-      return true;
-    }
+    case Mutation::kNearQuaternion:
+      return ScaleQuaternion(mutation, s, meta);
     case Mutation::kWrongType: {
       int t;
       do {
         t = static_cast<int>(s.Int(0, 13));
       } while (t == type);
       header->set_type(static_cast<pb::MsgType>(t));
-      reserialize();
       return true;
     }
     case Mutation::kWrongVersion:
       header->set_schema_version(s.Int(0, 1) ? 0 : kSchemaVersion + s.Int(1, 1000));
-      reserialize();
       return true;
-    case Mutation::kImageGeometry: {
-      std::vector<pb::ImageInfo*> infos;
-      FindAll(meta.get(), &infos);
-      if (infos.empty()) return false;
-      pb::ImageInfo* info = infos[s.Int(0, static_cast<uint32_t>(infos.size() - 1))];
-      switch (s.Int(0, 5)) {
-        case 0: info->set_width(s.Int(0, 1) ? 0 : s.Int(0, 40000)); break;
-        case 1: info->set_height(s.Int(0, 1) ? 0 : s.Int(0, 40000)); break;
-        case 2: info->set_step(s.Int(0, 200)); break;
-        case 3: info->set_encoding(static_cast<pb::Encoding>(s.Int(0, 7))); break;
-        case 4: info->set_blob_index(s.Int(0, 8)); break;
-        default: info->set_depth_scale(s.Uniform(-1, 1)); break;
-      }
-      reserialize();
-      return true;
-    }
-    case Mutation::kCount: break;
+    case Mutation::kImageGeometry:
+      return BreakImageGeometry(s, meta);
+    default:
+      return false;
   }
-  return false;
+}
+
+/// Applies `mutation` to `wire` (of type `type`). Returns false if it does not apply to this
+/// message (e.g. no quaternion in it); the caller then picks another.
+bool Mutate(Mutation mutation, pb::MsgType type, testing::Samples& s, WireMessage* wire) {
+  auto meta = NewMessage(type);
+  REQUIRE(meta->ParseFromString(wire->header));
+  if (mutation == Mutation::kNone) return true;
+  if (mutation <= Mutation::kBlobSize) return MutateFrames(mutation, s, wire);
+  if (!MutateFields(mutation, type, s, meta.get())) return false;
+  wire->header.clear();
+  gpb::io::StringOutputStream bytes(&wire->header);
+  gpb::io::CodedOutputStream coded(&bytes);
+  coded.SetSerializationDeterministic(true);  // map order is random per process otherwise
+  meta->SerializeToCodedStream(&coded);
+  return true;
 }
 
 TEST_CASE("fuzz: 12000 random and mutated messages at every decoder", "[unit]") {
