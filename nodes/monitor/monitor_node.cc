@@ -24,10 +24,7 @@ namespace {
 
 using util::Median;
 using util::NumberOrNull;
-/// Nearest rank, as model::LatencyRecorder.
-double Percentile(const std::vector<double>& v, double p) {
-  return util::PercentileNearestRank(v, p);
-}
+using util::PercentileNearestRank;  // as model::LatencyRecorder
 
 }  // namespace
 
@@ -110,7 +107,7 @@ std::string MonitorNode::SummaryText() const {
   os << "views served:              " << views_received_ << " (" << views_scored_
      << " scored against the sim ground truth)\n";
   std::snprintf(line, sizeof(line), "latency (queue+render) ms: p50 %.1f  p99 %.1f\n",
-                Median(latency_ms_), Percentile(latency_ms_, 99));
+                Median(latency_ms_), PercentileNearestRank(latency_ms_, 99));
   os << line;
   std::snprintf(line, sizeof(line),
                 "PSNR dB (median):          %.2f   (same poses: nearest keyframe %.2f, depth "
@@ -160,7 +157,7 @@ void MonitorNode::Finish() {
     j["views_served"] = views_received_;
     j["views_scored"] = views_scored_;
     j["latency_ms_p50"] = NumberOrNull(Median(latency_ms_));
-    j["latency_ms_p99"] = NumberOrNull(Percentile(latency_ms_, 99));
+    j["latency_ms_p99"] = NumberOrNull(PercentileNearestRank(latency_ms_, 99));
     j["psnr_db_median"] = NumberOrNull(Median(psnr_));
     j["nearest_keyframe_psnr_db_median"] = NumberOrNull(Median(nearest_psnr_));
     j["depth_warp_psnr_db_median"] = NumberOrNull(Median(warp_psnr_));
