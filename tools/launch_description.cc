@@ -13,6 +13,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "tools/launch_substitution.h"
+#include "util/yaml_flow.h"
 
 namespace p2i::tools {
 namespace {
@@ -84,14 +85,6 @@ std::string AbsolutePath(const std::string& path) {
 }
 
 std::string Dirname(const std::string& path) { return fs::path(path).parent_path().string(); }
-
-std::string EmitFlow(const YAML::Node& node) {
-  YAML::Emitter out;
-  out.SetMapFormat(YAML::Flow);
-  out.SetSeqFormat(YAML::Flow);
-  out << node;
-  return out.c_str();
-}
 
 /// Reads one launch tree. Holds the result while reading; not reusable.
 class Reader {
@@ -323,7 +316,7 @@ class Reader {
           Fail(file, p["name"], "name", "'" + param.name + "' is not a parameter name");
         }
         if (!p["value"]) Fail(file, p, "value", "parameter '" + param.name + "' has no value");
-        param.value_yaml = EmitFlow(SubstituteNode(p["value"], scope, "value"));
+        param.value_yaml = util::YamlFlow(SubstituteNode(p["value"], scope, "value"));
       }
       node->params.push_back(std::move(param));
     }

@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "nodes/runtime/endpoints.h"
+#include "util/yaml_flow.h"
 
 namespace p2i::runtime {
 namespace {
@@ -25,14 +26,6 @@ void WriteAtomically(const std::string& path, const std::string& text) {
     if (!out) return;  // best effort, like the registry
   }
   std::rename(tmp.c_str(), path.c_str());
-}
-
-std::string Flow(const YAML::Node& n) {
-  YAML::Emitter out;
-  out.SetMapFormat(YAML::Flow);
-  out.SetSeqFormat(YAML::Flow);
-  out << n;
-  return out.c_str();
 }
 
 }  // namespace
@@ -101,7 +94,7 @@ void ParamService::Poll() {
                ":=VALUE)";
     } else {
       setters_.at(name)(req["value"]);
-      changed_[name] = Flow(req["value"]);
+      changed_[name] = util::YamlFlow(req["value"]);
       Publish();
     }
   } catch (const std::exception& e) {

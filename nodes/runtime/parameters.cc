@@ -5,6 +5,8 @@
 #include <fstream>
 #include <sstream>
 
+#include "util/yaml_flow.h"
+
 namespace p2i::runtime {
 
 Parameters::Parameters(const NodeArgs& args, const std::string& node_name,
@@ -102,13 +104,7 @@ void Parameters::SetOverride(const std::string& key, const std::string& yaml_val
   supplied_[key] = Supplied{value, source};
 }
 
-std::string Parameters::ToFlow(const YAML::Node& node) {
-  YAML::Emitter out;
-  out.SetMapFormat(YAML::Flow);
-  out.SetSeqFormat(YAML::Flow);
-  out << node;
-  return out.c_str();
-}
+std::string Parameters::ToFlow(const YAML::Node& node) { return util::YamlFlow(node); }
 
 void Parameters::Record(const std::string& name, const std::string& description,
                         const YAML::Node& default_node, const YAML::Node& value_node,

@@ -8,6 +8,7 @@
 
 #include "model/method_registry.h"
 #include "nodes/runtime/option_error.h"
+#include "util/yaml_flow.h"
 
 namespace p2i::nodes {
 
@@ -19,11 +20,7 @@ namespace {
 std::string MethodOptionsText(const YAML::Node& value) {
   if (!value || value.IsNull()) return "";
   if (value.IsScalar()) return value.as<std::string>();
-  YAML::Emitter out;
-  out.SetMapFormat(YAML::Flow);
-  out.SetSeqFormat(YAML::Flow);
-  out << value;
-  return out.c_str();
+  return util::YamlFlow(value);
 }
 
 }  // namespace
