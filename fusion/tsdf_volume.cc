@@ -33,6 +33,7 @@
 #include <open3d/t/geometry/VoxelBlockGrid.h>
 #undef private
 
+#include "fusion/tsdf_field.h"
 #include "scene/strict_yaml_reader.h"
 
 namespace p2i::fusion {
@@ -52,9 +53,20 @@ void UseThreads(int threads) {
   omp_set_num_threads(threads);
 }
 
-core::Tensor Intrinsic(const scene::CameraInfo& c) {
-  return core::Tensor::Init<double>({{c.fx(), 0.0, c.cx()}, {0.0, c.fy(), c.cy()}, {0.0, 0.0, 1.0}});
+/// Open3D's intrinsic of a camera. `shift` is added to the principal point: see IntegrationIntrinsic.
+core::Tensor Intrinsic(const scene::CameraInfo& c, double shift = 0.0) {
+  return core::Tensor::Init<double>(
+      {{c.fx(), 0.0, c.cx() + shift}, {0.0, c.fy(), c.cy() + shift}, {0.0, 0.0, 1.0}});
 }
+
+/// The intrinsic Integrate is given. p2i (like OpenCV) puts pixel centres at integer coordinates,
+/// and so does Open3D's RayCast (the ray of pixel (x, y) goes through (x, y)). Open3D 0.16's
+/// Integrate, though, reads the depth pixel of a voxel projecting to (u, v) as (int(u), int(v)):
+/// it truncates, so a pixel's depth lands half a pixel right of and below where it was measured
+/// and the fused surface sits half a pixel off every raycast (on surfaces at an angle to the view
+/// a depth bias of half a pixel's slope, at edges a misplaced silhouette). Shifting the principal
+/// point by +0.5 turns the truncation into rounding: int(u + 0.5) is the nearest pixel centre.
+core::Tensor IntegrationIntrinsic(const scene::CameraInfo& c) { return Intrinsic(c, 0.5); }
 
 /// World-to-camera 4x4 (Open3D's extrinsic) of a camera-to-world pose.
 core::Tensor Extrinsic(const scene::Pose& pose) {
@@ -71,11 +83,26 @@ int Int(const scene::StrictYamlReader& r, const YAML::Node& n, const std::string
   return static_cast<int>(v);
 }
 
-/// One pass of crack filling (TsdfOptions::crack_fill_passes) on a raycast.
-void FillCracks(TsdfRaycast* r) {
+bool Bool(const scene::StrictYamlReader& r, const YAML::Node& n, const std::string& what) {
+  try {
+    return n.as<bool>();
+  } catch (const YAML::Exception&) {
+    r.Fail(n, what + " must be true or false");
+  }
+  return false;
+}
+
+/// One pass of crack filling (TsdfOptions::crack_fill_passes) on a raycast. A pixel without a hit
+/// whose valid 8-neighbours (at least 3) agree within 5 % is a crack: with a field, its own ray
+/// is marched through the neighbours' depth range for the zero crossing; without one (or where
+/// the march finds none) it takes the neighbours' mean depth. Normal and colour: their means.
+void FillCracks(const TsdfField* field, const scene::Pose& pose, const scene::CameraInfo& camera,
+                TsdfRaycast* r) {
   const cv::Mat depth = r->depth.clone();
   const cv::Mat normals = r->normals.clone();
   const cv::Mat colour = r->colour.clone();
+  const Eigen::Matrix3f cw = pose.ToMatrix().block<3, 3>(0, 0).cast<float>();
+  const Eigen::Vector3f origin = pose.translation().cast<float>();
   for (int v = 1; v + 1 < depth.rows; ++v) {
     for (int u = 1; u + 1 < depth.cols; ++u) {
       if (depth.at<float>(v, u) > 0.0f) continue;
@@ -96,7 +123,12 @@ void FillCracks(TsdfRaycast* r) {
       if (n < 3 || zmax > 1.05f * zmin) continue;
       const float len = static_cast<float>(cv::norm(nsum));
       if (!(len > 1e-6f)) continue;
-      r->depth.at<float>(v, u) = zsum / n;
+      float z = 0.0f;
+      if (field) {
+        const Eigen::Vector3f ray((u - camera.cx()) / camera.fx(), (v - camera.cy()) / camera.fy(), 1.0f);
+        z = field->FindCrossing(origin, cw * ray, 0.97f * zmin, 1.03f * zmax);
+      }
+      r->depth.at<float>(v, u) = z > 0.0f ? z : zsum / n;
       r->normals.at<cv::Vec3f>(v, u) = nsum / len;
       r->colour.at<cv::Vec3f>(v, u) = csum / static_cast<float>(n);
     }
@@ -109,7 +141,7 @@ TsdfOptions TsdfOptions::FromYaml(const YAML::Node& node, const std::string& sou
   const scene::StrictYamlReader r(source);
   r.CheckKeys(node,
               {"voxel_size_m", "block_resolution", "initial_blocks", "trunc_voxels", "depth_min_m",
-               "depth_max_m", "weight_threshold", "crack_fill_passes", "threads"},
+               "depth_max_m", "weight_threshold", "crack_fill_passes", "threads", "refine_hits"},
               "tsdf options");
   TsdfOptions o;
   r.OptionalDouble(node, "voxel_size_m", "tsdf", &o.voxel_size_m);
@@ -121,6 +153,7 @@ TsdfOptions TsdfOptions::FromYaml(const YAML::Node& node, const std::string& sou
   r.OptionalDouble(node, "weight_threshold", "tsdf", &o.weight_threshold);
   if (node["crack_fill_passes"]) o.crack_fill_passes = Int(r, node["crack_fill_passes"], "crack_fill_passes");
   if (node["threads"]) o.threads = Int(r, node["threads"], "threads");
+  if (node["refine_hits"]) o.refine_hits = Bool(r, node["refine_hits"], "refine_hits");
   try {
     o.Validate();
   } catch (const std::invalid_argument& e) {
@@ -187,9 +220,83 @@ void TsdfVolume::Integrate(const scene::RgbdSample& frame, const scene::CameraIn
     ++impl_->frames;  // nothing valid in range: the frame adds nothing
     return;
   }
-  impl_->grid.Integrate(blocks, di, ci, k, e, 1.0f, dmax, trunc);
+  impl_->grid.Integrate(blocks, di, ci, IntegrationIntrinsic(camera), e, 1.0f, dmax, trunc);
   ++impl_->frames;
 }
+
+namespace {
+
+/// Keys (x, y, z per block) of the blocks whose bounding sphere can be in the view frustum, so
+/// the raycast's range map covers only what this view can see.
+std::vector<int> FrustumBlocks(const int* kp, int64_t n, const TsdfOptions& o, const Eigen::Matrix4d& wc,
+                               const scene::CameraInfo& camera) {
+  const int w = camera.image_width, h = camera.image_height;
+  const double block = o.voxel_size_m * o.block_resolution;
+  const double radius = block * std::sqrt(3.0) * 0.5;
+  const Eigen::Matrix3d r = wc.block<3, 3>(0, 0);
+  const Eigen::Vector3d t = wc.block<3, 1>(0, 3);
+  std::vector<int> selected;
+  selected.reserve(static_cast<size_t>(n) * 3);
+  for (int64_t i = 0; i < n; ++i) {
+    const Eigen::Vector3d centre((kp[3 * i] + 0.5) * block, (kp[3 * i + 1] + 0.5) * block,
+                                 (kp[3 * i + 2] + 0.5) * block);
+    const Eigen::Vector3d pc = r * centre + t;
+    if (pc.z() < -radius || pc.z() > o.depth_max_m + radius) continue;
+    if (pc.z() > radius) {
+      const double u = camera.fx() * pc.x() / pc.z() + camera.cx();
+      const double v = camera.fy() * pc.y() / pc.z() + camera.cy();
+      const double mu = camera.fx() * radius / (pc.z() - radius) + 1.0;
+      const double mv = camera.fy() * radius / (pc.z() - radius) + 1.0;
+      if (u < -mu || u > w + mu || v < -mv || v > h + mv) continue;
+    }
+    selected.insert(selected.end(), {kp[3 * i], kp[3 * i + 1], kp[3 * i + 2]});
+  }
+  return selected;
+}
+
+/// Range map factor (ray start/end per tile of down x down pixels): Open3D's default 8, finer for
+/// small images so that a tile does not span a large part of the view. It must divide both
+/// sizes: otherwise Open3D 0.16 reads past the range map and RayCast hangs now and then (seen
+/// at 80x60 with factor 3, a GOMP_parallel loop that never returns).
+int RangeMapFactor(int w, int h) {
+  int down = std::max(1, std::min(8, std::min(w, h) / 16));
+  while (down > 1 && (w % down != 0 || h % down != 0)) --down;
+  return down;
+}
+
+/// Open3D's raycast maps (depth, camera-frame normals, voxel colour) into `out`: hits only, the
+/// depth moved onto the trilinear zero crossing when `field` is given, normals facing the camera.
+void CopyHits(const float* dp, const float* np, const float* cp, const scene::Pose& pose,
+              const scene::CameraInfo& camera, const TsdfField* field, TsdfRaycast* out) {
+  const Eigen::Matrix3f rf = pose.Inverse().ToMatrix().block<3, 3>(0, 0).cast<float>();
+  const Eigen::Matrix3f cw = pose.ToMatrix().block<3, 3>(0, 0).cast<float>();
+  const Eigen::Vector3f origin = pose.translation().cast<float>();
+  const int w = camera.image_width, h = camera.image_height;
+  for (int v = 0; v < h; ++v) {
+    float* drow = out->depth.ptr<float>(v);
+    cv::Vec3f* nrow = out->normals.ptr<cv::Vec3f>(v);
+    cv::Vec3f* crow = out->colour.ptr<cv::Vec3f>(v);
+    for (int u = 0; u < w; ++u) {
+      const size_t i = static_cast<size_t>(v) * w + u;
+      float z = dp[i];
+      if (!(z > 0.0f) || !std::isfinite(z)) continue;
+      Eigen::Vector3f nc = rf * Eigen::Vector3f(np[3 * i], np[3 * i + 1], np[3 * i + 2]);
+      const float len = nc.norm();
+      if (!(len > 1e-6f)) continue;  // no gradient: not a usable surface
+      nc /= len;
+      const Eigen::Vector3f ray((u - camera.cx()) / camera.fx(), (v - camera.cy()) / camera.fy(), 1.0f);
+      if (nc.dot(ray) > 0.0f) nc = -nc;  // face the camera
+      if (field) z = field->RefineHit(origin, cw * ray, z);  // t along a ray with z = 1: z-depth
+      drow[u] = z;
+      nrow[u] = cv::Vec3f(nc.x(), nc.y(), nc.z());
+      crow[u] = cv::Vec3f(std::min(1.0f, std::max(0.0f, cp[3 * i])),
+                          std::min(1.0f, std::max(0.0f, cp[3 * i + 1])),
+                          std::min(1.0f, std::max(0.0f, cp[3 * i + 2])));
+    }
+  }
+}
+
+}  // namespace
 
 TsdfRaycast TsdfVolume::Raycast(const scene::Pose& pose, const scene::CameraInfo& camera) {
   const int w = camera.image_width, h = camera.image_height;
@@ -203,43 +310,16 @@ TsdfRaycast TsdfVolume::Raycast(const scene::Pose& pose, const scene::CameraInfo
   core::HashMap map = impl_->grid.GetHashMap();
   if (map.Size() == 0) return out;
 
-  // Blocks in the view frustum (block centre projected inside the image, grown by the block's
-  // bounding radius), so the raycast's range map covers only what this view can see.
   const core::Tensor active = map.GetActiveIndices().To(core::Int64);
   const core::Tensor keys = map.GetKeyTensor().IndexGet({active}).Contiguous();  // (N, 3) Int32
   const int64_t n = keys.GetLength();
   const int* kp = keys.GetDataPtr<int>();
-  const double block = options_.voxel_size_m * options_.block_resolution;
-  const double radius = block * std::sqrt(3.0) * 0.5;
-  const Eigen::Matrix4d wc = pose.Inverse().ToMatrix();
-  const Eigen::Matrix3d r = wc.block<3, 3>(0, 0);
-  const Eigen::Vector3d t = wc.block<3, 1>(0, 3);
-  std::vector<int> selected;
-  selected.reserve(static_cast<size_t>(n) * 3);
-  for (int64_t i = 0; i < n; ++i) {
-    const Eigen::Vector3d centre((kp[3 * i] + 0.5) * block, (kp[3 * i + 1] + 0.5) * block,
-                                 (kp[3 * i + 2] + 0.5) * block);
-    const Eigen::Vector3d pc = r * centre + t;
-    if (pc.z() < -radius || pc.z() > options_.depth_max_m + radius) continue;
-    if (pc.z() > radius) {
-      const double u = camera.fx() * pc.x() / pc.z() + camera.cx();
-      const double v = camera.fy() * pc.y() / pc.z() + camera.cy();
-      const double mu = camera.fx() * radius / (pc.z() - radius) + 1.0;
-      const double mv = camera.fy() * radius / (pc.z() - radius) + 1.0;
-      if (u < -mu || u > w + mu || v < -mv || v > h + mv) continue;
-    }
-    selected.insert(selected.end(), {kp[3 * i], kp[3 * i + 1], kp[3 * i + 2]});
-  }
+  const std::vector<int> selected = FrustumBlocks(kp, n, options_, pose.Inverse().ToMatrix(), camera);
   if (selected.empty()) return out;
   const core::Tensor frustum(selected, {static_cast<int64_t>(selected.size() / 3), 3}, core::Int32);
 
   const core::Tensor k = Intrinsic(camera), e = Extrinsic(pose);
-  // Range map (ray start/end per tile of down x down pixels): Open3D's default factor 8, finer for
-  // small images so that a tile does not span a large part of the view. It must divide both
-  // sizes: otherwise Open3D 0.16 reads past the range map and RayCast hangs now and then (seen
-  // at 80x60 with factor 3, a GOMP_parallel loop that never returns).
-  int down = std::max(1, std::min(8, std::min(w, h) / 16));
-  while (down > 1 && (w % down != 0 || h % down != 0)) --down;
+  const int down = RangeMapFactor(w, h);
   // Upper bound of the fragments (16 x 16 tiles of the range map) the frustum blocks can need,
   // plus one for Open3D's ">=" check (see the include above).
   const int64_t h_down = (h + down - 1) / down, w_down = (w + down - 1) / down;
@@ -254,32 +334,21 @@ TsdfRaycast TsdfVolume::Raycast(const scene::Pose& pose, const scene::CameraInfo
   const core::Tensor depth = result["depth"].Contiguous();
   const core::Tensor normal = result["normal"].Contiguous();
   const core::Tensor colour = result["color"].Contiguous();
-  const float* dp = depth.GetDataPtr<float>();
-  const float* np = normal.GetDataPtr<float>();
-  const float* cp = colour.GetDataPtr<float>();
-  const Eigen::Matrix3f rf = r.cast<float>();
-  for (int v = 0; v < h; ++v) {
-    float* drow = out.depth.ptr<float>(v);
-    cv::Vec3f* nrow = out.normals.ptr<cv::Vec3f>(v);
-    cv::Vec3f* crow = out.colour.ptr<cv::Vec3f>(v);
-    for (int u = 0; u < w; ++u) {
-      const size_t i = static_cast<size_t>(v) * w + u;
-      const float z = dp[i];
-      if (!(z > 0.0f) || !std::isfinite(z)) continue;
-      Eigen::Vector3f nc = rf * Eigen::Vector3f(np[3 * i], np[3 * i + 1], np[3 * i + 2]);
-      const float len = nc.norm();
-      if (!(len > 1e-6f)) continue;  // no gradient: not a usable surface
-      nc /= len;
-      const Eigen::Vector3f ray((u - camera.cx()) / camera.fx(), (v - camera.cy()) / camera.fy(), 1.0f);
-      if (nc.dot(ray) > 0.0f) nc = -nc;  // face the camera
-      drow[u] = z;
-      nrow[u] = cv::Vec3f(nc.x(), nc.y(), nc.z());
-      crow[u] = cv::Vec3f(std::min(1.0f, std::max(0.0f, cp[3 * i])),
-                          std::min(1.0f, std::max(0.0f, cp[3 * i + 1])),
-                          std::min(1.0f, std::max(0.0f, cp[3 * i + 2])));
-    }
+  std::unique_ptr<TsdfField> field;
+  if (options_.refine_hits) {
+    // The grid's own arrays (contiguous per block buffer index): nothing is copied.
+    const core::Tensor& tsdf = impl_->grid.GetAttribute("tsdf");
+    const core::Tensor& weight = impl_->grid.GetAttribute("weight");
+    field = std::make_unique<TsdfField>(static_cast<float>(options_.voxel_size_m),
+                                        options_.block_resolution, tsdf.GetDataPtr<float>(),
+                                        weight.GetDataPtr<float>());
+    const int64_t* ap = active.GetDataPtr<int64_t>();
+    for (int64_t i = 0; i < n; ++i) field->AddBlock(kp[3 * i], kp[3 * i + 1], kp[3 * i + 2], ap[i]);
   }
-  for (int pass = 0; pass < options_.crack_fill_passes; ++pass) FillCracks(&out);
+  CopyHits(depth.GetDataPtr<float>(), normal.GetDataPtr<float>(), colour.GetDataPtr<float>(), pose,
+           camera, field.get(), &out);
+  for (int pass = 0; pass < options_.crack_fill_passes; ++pass)
+    FillCracks(field.get(), pose, camera, &out);
   return out;
 }
 

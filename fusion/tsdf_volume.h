@@ -34,9 +34,14 @@ struct TsdfOptions {
   double weight_threshold = 0.5;
   /// Raycast cracks: Open3D's raycast leaves thin lines without a hit where the surface was
   /// observed (along the silhouettes of objects in the frames that were fused). A pixel without a
-  /// hit whose valid 8-neighbours (at least 3) agree within 5 % takes their mean depth and normal,
-  /// repeated this many passes (0 = off).
+  /// hit whose valid 8-neighbours (at least 3) agree within 5 % is marched along its own ray
+  /// through their depth range (with refine_hits; else, or where that finds no crossing, it takes
+  /// their mean depth) and takes their mean normal and colour, repeated this many passes (0 = off).
   int crack_fill_passes = 2;
+  /// Raycast: move each hit onto the zero crossing of the trilinearly read TSDF (TsdfField;
+  /// Open3D's own crossing comes from nearest-voxel values and is off by up to a voxel along the
+  /// ray). false = Open3D's depth as it is.
+  bool refine_hits = true;
   /// OpenMP threads of Open3D's kernels (set in the calling thread before each call).
   int threads = 1;
   /// Reads the keys present in a YAML map (others keep their defaults), then Validate().

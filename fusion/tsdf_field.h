@@ -1,0 +1,63 @@
+/// @file tsdf_field.h
+/// @brief Trilinear reading of a sparse block TSDF and the sub-voxel refinement of a raycast hit.
+///
+/// Open3D 0.16's VoxelBlockGrid::RayCast finds the zero crossing from *nearest-voxel* TSDF values
+/// read with a floor (the voxel (i, j, k) holds the value at (i, j, k) x voxel_size, but every
+/// point of the cell [i, i + 1) reads it): the sampled field is a staircase shifted by up to one
+/// voxel, and its crossing is off by up to a voxel along the ray, more at grazing angles
+/// (measured on a fused plane seen at 30 degrees with 1 cm voxels: depth errors of up to 2 % in a
+/// pattern that follows the voxel grid). This file reads the same voxels trilinearly, as Open3D
+/// does for normals and colour, and moves each hit onto the trilinear field's zero crossing.
+/// No Open3D type here: the caller hands over raw pointers to the grid's tsdf and weight arrays.
+#pragma once
+
+#include <cstdint>
+#include <unordered_map>
+
+#include <Eigen/Core>
+
+namespace p2i::fusion {
+
+class TsdfField {
+ public:
+  /// `tsdf` and `weight` are the grid's per-voxel arrays, laid out per block buffer index as
+  /// [block][z][y][x] (Open3D's layout), block_resolution^3 floats per block. Not owned.
+  TsdfField(float voxel_size, int block_resolution, const float* tsdf, const float* weight);
+
+  /// Registers the block with integer key (bx, by, bz) stored at `buffer_index`.
+  void AddBlock(int bx, int by, int bz, int64_t buffer_index);
+
+  /// Trilinear TSDF at world point p (voxel values at integer multiples of the voxel size).
+  /// False where any of the 8 voxels around p is not allocated or was never observed.
+  bool Sample(const Eigen::Vector3f& p, float* value) const;
+
+  /// Hits are moved by at most this many voxels along the ray.
+  static constexpr float kMaxShiftVoxels = 6.0f;
+
+  /// The zero crossing of the trilinear field on the ray o + t d near t0 (t in the units of d,
+  /// e.g. z-depth for a d with d.z() = 1 in the camera frame): two secant steps on a bracket of
+  /// +-half a voxel around t0; where that bracket holds no crossing (front > 0 before back <= 0),
+  /// a half-voxel march from three voxels before t0 up to kMaxShiftVoxels after it. Returns t0 where
+  /// neither finds one.
+  float RefineHit(const Eigen::Vector3f& o, const Eigen::Vector3f& d, float t0) const;
+
+  /// Marches the ray o + t d from t_begin to t_end in half-voxel steps and returns the first zero
+  /// crossing (front > 0 to back <= 0, both observed), refined as RefineHit does; 0 = none. For
+  /// the pixels Open3D's raycast misses (it steps by the TSDF value, which at grazing angles jumps
+  /// over the whole band behind a surface).
+  float FindCrossing(const Eigen::Vector3f& o, const Eigen::Vector3f& d, float t_begin, float t_end) const;
+
+ private:
+  float March(const Eigen::Vector3f& o, const Eigen::Vector3f& d, float t_begin, float t_end) const;
+  static int64_t Key(int64_t bx, int64_t by, int64_t bz);
+  /// Buffer index of the voxel's block, or -1; `local` is the voxel's index inside the block.
+  int64_t Find(int64_t vx, int64_t vy, int64_t vz, int64_t* local) const;
+
+  float voxel_;
+  int res_;
+  const float* tsdf_;
+  const float* weight_;
+  std::unordered_map<int64_t, int64_t> blocks_;
+};
+
+}  // namespace p2i::fusion
