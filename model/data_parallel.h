@@ -33,10 +33,13 @@ class DataParallel {
   /// Copies rank 0's values into every rank's `tensors` (parameters at start and on resume).
   void Broadcast(const std::vector<torch::Tensor>& tensors);
   /// Replaces every defined gradient of `params` by its mean over the ranks (one flat
-  /// all-reduce). Throws std::runtime_error "... lost contact ..." when a rank died or timed out.
-  void AverageGradients(const std::vector<torch::Tensor>& params);
+  /// all-reduce). The divergence guard's decision rides in the same all-reduce: `diverged` is
+  /// this rank's verdict on the loss, one more float32 at the end of the buffer, and the result
+  /// is true on every rank when any rank's was (so every rank rolls back, or none). Throws
+  /// std::runtime_error "... lost contact ..." when a rank died or timed out.
+  bool AverageGradients(const std::vector<torch::Tensor>& params, bool diverged = false);
   /// The optimiser's parameters' gradients (call between backward() and step()).
-  void AverageGradients(torch::optim::Optimizer& optimizer);
+  bool AverageGradients(torch::optim::Optimizer& optimizer, bool diverged = false);
   /// Start of a run: every rank must be at the same steps (resume from the same checkpoint),
   /// then all parameters and buffers of `nets` are copied from rank 0.
   void Start(const int* phase1_step, const int* phase2_step, Networks& nets);
@@ -44,12 +47,14 @@ class DataParallel {
   bool Any(bool flag);
   /// Throws std::runtime_error unless every rank passes the same `value` (e.g. resume steps).
   void Agree(int64_t value, const std::string& what);
-  /// The smallest `value` over the ranks (`what` names it in a lost-contact error).
-  int64_t Min(int64_t value, const std::string& what);
+  /// The element-wise smallest `values` over the ranks (every rank passes as many; `what`
+  /// names it in a lost-contact error). Exact for integers up to 2^53.
+  std::vector<double> Min(const std::vector<double>& values, const std::string& what);
   /// Rank 0's `bytes` on every rank (its size first, then the bytes; `what` as for Min).
   std::string BroadcastBytes(const std::string& bytes, const std::string& what);
 
-  /// Bytes all-reduced per AverageGradients call (last call) and the time spent in them.
+  /// Bytes all-reduced per AverageGradients call (last call: the gradients as float32 plus the
+  /// 4-byte divergence flag) and the time spent in them.
   int64_t LastAllReduceBytes() const { return last_bytes_; }
   /// Writes DIR/distributed.rank<R>.json (steps, bytes per step, all-reduce ms mean/p50/max).
   void WriteStats(const std::string& dir) const;

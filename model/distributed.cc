@@ -99,14 +99,27 @@ DataParallel::~DataParallel() = default;
 std::shared_ptr<DataParallel> DataParallel::For(const DistributedOptions& options) {
   if (!options.Enabled()) return nullptr;
   options.Validate();
+  // One group per (master, rank, world_size), made once. The rendezvous blocks until every
+  // rank has arrived, so only that key's entry is locked meanwhile: several ranks of one
+  // process (threads, e.g. tests) can meet each other.
+  struct Entry {
+    std::mutex mutex;
+    std::shared_ptr<DataParallel> group;
+  };
   static std::mutex mutex;
-  static std::map<std::string, std::shared_ptr<DataParallel>> groups;
+  static std::map<std::string, std::shared_ptr<Entry>> groups;
   const std::string key = options.master + "#" + std::to_string(options.rank) + "/" +
                           std::to_string(options.world_size);
-  std::lock_guard<std::mutex> lock(mutex);
-  auto& g = groups[key];
-  if (!g) g.reset(new DataParallel(options));
-  return g;
+  std::shared_ptr<Entry> entry;
+  {
+    std::lock_guard<std::mutex> lock(mutex);
+    auto& e = groups[key];
+    if (!e) e = std::make_shared<Entry>();
+    entry = e;
+  }
+  std::lock_guard<std::mutex> lock(entry->mutex);
+  if (!entry->group) entry->group.reset(new DataParallel(options));
+  return entry->group;
 }
 
 void DataParallel::Lost(const std::string& during, const std::exception& e) const {
@@ -130,14 +143,15 @@ void DataParallel::Broadcast(const std::vector<torch::Tensor>& tensors) {
   }
 }
 
-void DataParallel::AverageGradients(const std::vector<torch::Tensor>& params) {
+bool DataParallel::AverageGradients(const std::vector<torch::Tensor>& params, bool diverged) {
   torch::NoGradGuard no_grad;
   std::vector<torch::Tensor> grads;
   for (const auto& p : params)
     if (p.grad().defined()) grads.push_back(p.grad());
-  if (grads.empty()) return;
   std::vector<torch::Tensor> flat_parts;
-  for (const auto& g : grads) flat_parts.push_back(g.reshape({-1}));
+  for (const auto& g : grads) flat_parts.push_back(g.reshape({-1}).to(torch::kFloat));
+  // The divergence verdict: > 0 after the sum when any rank's loss diverged.
+  flat_parts.push_back(torch::tensor({diverged ? 1.0f : 0.0f}));
   torch::Tensor flat = torch::cat(flat_parts);
   const auto t0 = std::chrono::steady_clock::now();
   try {
@@ -150,6 +164,10 @@ void DataParallel::AverageGradients(const std::vector<torch::Tensor>& params) {
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
   last_bytes_ = flat.numel() * static_cast<int64_t>(flat.element_size());
   allreduce_bytes_.push_back(last_bytes_);
+  const int64_t n_grads = flat.numel() - 1;
+  // The flag is its own element: NaN gradients of a diverged rank do not reach it.
+  const bool any_diverged = flat[n_grads].item<float>() > 0.5f;
+  if (any_diverged) return true;  // the caller rolls back; these gradients are never applied
   flat.div_(static_cast<double>(options_.world_size));
   int64_t offset = 0;
   for (auto& g : grads) {
@@ -157,13 +175,14 @@ void DataParallel::AverageGradients(const std::vector<torch::Tensor>& params) {
     g.copy_(flat.slice(0, offset, offset + n).view_as(g));
     offset += n;
   }
+  return false;
 }
 
-void DataParallel::AverageGradients(torch::optim::Optimizer& optimizer) {
+bool DataParallel::AverageGradients(torch::optim::Optimizer& optimizer, bool diverged) {
   std::vector<torch::Tensor> params;
   for (auto& group : optimizer.param_groups())
     for (auto& p : group.params()) params.push_back(p);
-  AverageGradients(params);
+  return AverageGradients(params, diverged);
 }
 
 void DataParallel::Start(const int* phase1_step, const int* phase2_step, Networks& nets) {
@@ -214,8 +233,9 @@ void DataParallel::Agree(int64_t value, const std::string& what) {
                              "): give every rank the same checkpoint (rank 0's) and config");
 }
 
-int64_t DataParallel::Min(int64_t value, const std::string& what) {
-  torch::Tensor t = torch::tensor({value}, torch::kLong);
+std::vector<double> DataParallel::Min(const std::vector<double>& values, const std::string& what) {
+  if (values.empty()) return values;
+  torch::Tensor t = torch::tensor(values, torch::kDouble);
   try {
     std::vector<at::Tensor> one{t};
     c10d::AllreduceOptions o;
@@ -224,7 +244,8 @@ int64_t DataParallel::Min(int64_t value, const std::string& what) {
   } catch (const std::exception& e) {
     Lost(what, e);
   }
-  return t.item<int64_t>();
+  const double* p = t.data_ptr<double>();
+  return std::vector<double>(p, p + values.size());
 }
 
 std::string DataParallel::BroadcastBytes(const std::string& bytes, const std::string& what) {
@@ -257,7 +278,8 @@ DataParallel& GroupOf(const DistributedOptions& options) {
 }  // namespace
 
 int64_t MinOverRanks(const DistributedOptions& options, int64_t value) {
-  return GroupOf(options).Min(value, "the agreement on the round's frames");
+  return static_cast<int64_t>(
+      GroupOf(options).Min({static_cast<double>(value)}, "the ranks' poll between rounds")[0]);
 }
 
 std::string BroadcastFromRankZero(const DistributedOptions& options, const std::string& bytes) {

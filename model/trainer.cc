@@ -11,6 +11,7 @@
 #include <cstring>
 #include <limits>
 #include <random>
+#include <sstream>
 #include <stdexcept>
 
 #include <nlohmann/json.hpp>
@@ -23,6 +24,7 @@
 #include "model/metrics.h"
 #include "model/networks.h"
 #include "model/pose_dependence.h"
+#include "scene/capture.h"
 #include "scene/image_ops.h"
 
 namespace p2i::model {
@@ -147,6 +149,9 @@ class TrainingRun {
   void ApplyLearningRates();
   void Save();
   void Rollback(const std::string& why);
+  CheckpointMeta LoadRollbackPoint();
+  void ShareNormalizer(const scene::RgbdDataset& train, bool fresh);
+  void ReduceGradients(torch::optim::Optimizer& optimizer);
   void Log(const json& line);
   void Progress(const char* phase, int step, int target, const std::string& losses);
   Validation Validate(bool use_enet);
@@ -170,6 +175,7 @@ class TrainingRun {
   Validation last_val_;
   bool injected_ = false;
   bool stopped_ = false;
+  std::string diverged_;  // data-parallel: this rank's divergence, decided at the next all-reduce
   Clock::time_point phase_start_;
   int phase_start_step_ = 0;
   Clock::time_point last_progress_;
@@ -200,8 +206,7 @@ void TrainingRun::Rollback(const std::string& why) {
   const double new_scale = meta_.lr_scale * 0.5;
   const int rollbacks = meta_.rollbacks + 1;
   const int from1 = meta_.phase1_step, from2 = meta_.phase2_step;
-  meta_ = LoadCheckpoint(checkpoint_path_, *nets_, {opt_g_.get(), opt_d_.get(), opt_e_.get()},
-                         /*restore_rng=*/true);
+  meta_ = LoadRollbackPoint();
   meta_.lr_scale = new_scale;
   meta_.rollbacks = rollbacks;
   ApplyLearningRates();
@@ -216,6 +221,70 @@ void TrainingRun::Rollback(const std::string& why) {
   if (options_.progress)
     std::fprintf(stderr, "\ndivergence (%s): rolled back to the last checkpoint, lr x%.3g\n",
                  why.c_str(), meta_.lr_scale);
+}
+
+// The last checkpoint, rank 0's on every rank. Data-parallel: every rank gets here together
+// (the decision rode in an all-reduce, ReduceGradients) and rank 0 broadcasts the file's bytes,
+// so a rank whose out_dir holds an older copy (the trainer node's other ranks: theirs is the
+// round's start) or none rolls back to the same weights, optimiser state, RNG and steps.
+CheckpointMeta TrainingRun::LoadRollbackPoint() {
+  std::string path = checkpoint_path_;
+  if (dp_) {
+    std::string bytes;
+    if (dp_->IsWriter()) {
+      std::ifstream in(checkpoint_path_, std::ios::binary);
+      std::ostringstream ss;
+      ss << in.rdbuf();
+      bytes = ss.str();
+    }
+    bytes = dp_->BroadcastBytes(bytes, "the rollback to rank 0's checkpoint");
+    if (bytes.empty())
+      throw std::runtime_error("data-parallel rollback: rank 0 could not read " + checkpoint_path_);
+    if (!dp_->IsWriter()) {
+      path = options_.out_dir + "/rollback.rank" + std::to_string(dp_->Rank()) + ".pt";
+      scene::WriteFileAtomic(path, bytes);
+    }
+  }
+  CheckpointMeta meta = LoadCheckpoint(path, *nets_, {opt_g_.get(), opt_d_.get(), opt_e_.get()},
+                                       /*restore_rng=*/true);
+  if (path != checkpoint_path_) std::filesystem::remove(path);
+  return meta;
+}
+
+// Data-parallel fresh start: the pose normaliser of every rank's frames, not this rank's alone
+// (the trainer node's ranks hold disjoint shards; `p2i train`'s ranks read the same data, for
+// which nothing changes). The translation bounds are all-reduced (the minima, and the negated
+// maxima, by MIN); FromPoses of the two corner poses is FromPoses of the union of the ranks'
+// frames, margin included.
+void TrainingRun::ShareNormalizer(const scene::RgbdDataset& train, bool fresh) {
+  if (!dp_) return;
+  dp_->Agree(fresh ? 1 : 0, "a fresh start (no checkpoint to resume, no --init-from)");
+  if (!fresh) return;
+  std::vector<double> bounds(6, std::numeric_limits<double>::infinity());
+  for (const auto& f : train.frames) {
+    const auto p = PoseArray(f.pose);
+    for (int a = 0; a < 3; ++a) {
+      bounds[a] = std::min(bounds[a], p[a]);
+      bounds[3 + a] = std::min(bounds[3 + a], -p[a]);
+    }
+  }
+  bounds = dp_->Min(bounds, "the pose bounds of the ranks' frames");
+  const std::array<double, 7> lo{bounds[0], bounds[1], bounds[2], 0, 0, 0, 1};
+  const std::array<double, 7> hi{-bounds[3], -bounds[4], -bounds[5], 0, 0, 0, 1};
+  meta_.normalizer = PoseNormalizer::FromPoses({lo, hi});
+}
+
+// Between backward() and step(): the gradients' mean over the ranks, and their common verdict
+// on divergence (CheckLoss's, carried in the same all-reduce): every rank throws Divergence
+// and rolls back, or none does. One process: nothing to do (CheckLoss has thrown already).
+void TrainingRun::ReduceGradients(torch::optim::Optimizer& optimizer) {
+  if (!dp_) return;
+  const bool mine = !diverged_.empty();
+  const bool any = dp_->AverageGradients(optimizer, mine);
+  if (!any) return;
+  const std::string why = mine ? diverged_ : "a loss diverged on another rank";
+  diverged_.clear();
+  throw Divergence{why};
 }
 
 void TrainingRun::UpdateEma() {
@@ -309,13 +378,21 @@ torch::Tensor TrainingRun::BatchIndices(int phase, int step, int64_t n) const {
   return torch::tensor(idx, torch::kLong);
 }
 
+// The divergence guard on one loss. One process: throws Divergence at once. Data-parallel: the
+// verdict waits for this optimiser's all-reduce (ReduceGradients), which makes it every rank's
+// (a rollback on one rank only would put the ranks' weights and collectives out of step).
 void TrainingRun::CheckLoss(const torch::Tensor& loss, const char* what, int step) {
   (void)step;
   const double v = loss.item<double>();
-  if (!std::isfinite(v)) throw Divergence{std::string(what) + " is not finite"};
-  const double a = std::abs(v);
-  if (ema_ >= 0 && a > config_.explode_factor * std::max(ema_, 1.0))
-    throw Divergence{std::string(what) + " exploded to " + std::to_string(v)};
+  std::string why;
+  if (!std::isfinite(v)) {
+    why = std::string(what) + " is not finite";
+  } else if (ema_ >= 0 && std::abs(v) > config_.explode_factor * std::max(ema_, 1.0)) {
+    why = std::string(what) + " exploded to " + std::to_string(v);
+  }
+  if (why.empty()) return;
+  if (!dp_) throw Divergence{why};
+  if (diverged_.empty()) diverged_ = why;
 }
 
 void TrainingRun::TrackLoss(double magnitude) {
@@ -353,7 +430,7 @@ StepOutcome TrainingRun::BaselineStep(int step, const torch::Tensor& real, const
   CheckLoss(loss, "L2 loss", step);
   opt_g_->zero_grad();
   loss.backward();
-  if (dp_) dp_->AverageGradients(*opt_g_);
+  ReduceGradients(*opt_g_);
   opt_g_->step();
   const double v = loss.item<double>();
   TrackLoss(std::abs(v));
@@ -383,7 +460,7 @@ void TrainingRun::ExtraDiscriminatorSteps(int step) {
     CheckLoss(dl_k.total, "L_D", step);
     opt_d_->zero_grad();
     dl_k.total.backward();
-    if (dp_) dp_->AverageGradients(*opt_d_);
+    ReduceGradients(*opt_d_);
     opt_d_->step();
   }
 }
@@ -412,7 +489,7 @@ StepOutcome TrainingRun::AdversarialStep(int step, const torch::Tensor& real,
   CheckLoss(dl.total, "L_D", step);
   opt_d_->zero_grad();
   dl.total.backward();
-  if (dp_) dp_->AverageGradients(*opt_d_);
+  ReduceGradients(*opt_d_);
   opt_d_->step();
   // G step through the updated D, frozen: only opt_g steps, so D's weight gradients are not
   // computed (the same G gradients; model_bench --profile shows the saving).
@@ -429,7 +506,7 @@ StepOutcome TrainingRun::AdversarialStep(int step, const torch::Tensor& real,
     opt_g_->zero_grad();
     gl.total.backward();
   }
-  if (dp_) dp_->AverageGradients(*opt_g_);
+  ReduceGradients(*opt_g_);
   opt_g_->step();
   if (nets_->g_ema) UpdateEma();
   const double ld = dl.total.item<double>(), lg = gl.total.item<double>();
@@ -481,7 +558,7 @@ StepOutcome TrainingRun::EnetStep(int step, const torch::Tensor& generated,
   CheckLoss(el.total, "L_ENET", step);
   opt_e_->zero_grad();
   el.total.backward();
-  if (dp_) dp_->AverageGradients(*opt_e_);
+  ReduceGradients(*opt_e_);
   opt_e_->step();
   const double v = el.total.item<double>();
   TrackLoss(std::abs(v));
@@ -687,6 +764,7 @@ TrainReport TrainingRun::Execute(const scene::RgbdDataset& train, const scene::R
   InitialiseState(warm_from, source, train);
   dp_ = DataParallel::For(options_.distributed);
   if (dp_) dp_->Start(&meta_.phase1_step, &meta_.phase2_step, *nets_);  // same start everywhere
+  ShareNormalizer(train, !load_ && warm_from.empty());
   train_ = Prepare(train.frames, config_, meta_.normalizer, train.frames.size());
   val_ = Prepare(val.frames, config_, meta_.normalizer, static_cast<size_t>(options_.max_val_frames));
   TrainReport report;

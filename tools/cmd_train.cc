@@ -27,6 +27,8 @@ void OnStopSignal(int) { g_stop = 1; }
 
 // --world-size / --rank / --master ... (data-parallel ranks, docs/DISTRIBUTED.md).
 model::DistributedOptions g_distributed;
+// --inject-nan-at-step (hidden; tests: the divergence guard's rollback, docs/DISTRIBUTED.md).
+int g_inject_nan_at_step = -1;
 
 int Train(const model::P2iConfig& config, const scene::RgbdDataset& train,
           const scene::RgbdDataset& val, const std::string& out_dir, int phase, int steps,
@@ -41,6 +43,7 @@ int Train(const model::P2iConfig& config, const scene::RgbdDataset& train,
   options.progress = !quiet;
   options.should_stop = [] { return g_stop != 0; };
   options.distributed = g_distributed;
+  options.inject_nan_at_step = g_inject_nan_at_step;
   model::Trainer trainer(config, options);
   // Ctrl-C / SIGTERM stop between steps with a checkpoint (`--resume` continues exactly).
   std::signal(SIGINT, OnStopSignal);
@@ -154,6 +157,9 @@ int RunTrain(const std::vector<std::string>& args) {
                  "loopback master, else the host name's)");
   app.add_option("--dist-timeout", g_distributed.timeout_s,
                  "data-parallel: seconds to wait for the other ranks (rendezvous, each step)");
+  app.add_option("--inject-nan-at-step", g_inject_nan_at_step,
+                 "fault injection for tests: poison the phase-1 loss with NaN once at this step")
+      ->group("");  // hidden
   std::vector<std::string> rev(args.rbegin(), args.rend() - 1);
   try {
     app.parse(rev);
