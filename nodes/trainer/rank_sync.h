@@ -13,11 +13,23 @@
 
 namespace p2i::trainer {
 
+/// What the ranks told each other in one RankSync::Poll between rounds.
+struct RoundPoll {
+  /// The round's frame count: the smallest snapshot over the ranks when every rank is ready
+  /// (holds its min_frames), else 0 (every rank waits and polls again).
+  size_t frames = 0;
+  int stopped_rank = -1;   ///< the lowest rank whose loop is stopping (node shutdown); -1 none
+  int finished_rank = -1;  ///< the lowest rank that has run its max_rounds; -1 none
+};
+
 /// The data-parallel side of the TrainingLoop's rounds; with world_size 1 every call is a
 /// no-op that keeps today's single-process behaviour.
 ///
-/// Each round, every rank calls AgreeFrames() then ShareCheckpoint() (collectives, in that
-/// order, before its model::Trainer run), so every rank resumes from the same file: rank 0's
+/// Between rounds every rank calls Poll() every ~100 ms (a collective: the ranks move in step),
+/// so a round starts on every rank at the same poll, and a rank that stops or finishes
+/// announces it in its last poll: the others leave at that same poll, cleanly, instead of
+/// waiting for it at the next collective. Each round then calls ShareCheckpoint() (before its
+/// model::Trainer run), so every rank resumes from the same file: rank 0's
 /// work_dir/checkpoint.pt (weights, optimiser state, steps, pose normaliser). Only rank 0 saves
 /// checkpoints (model::Trainer), so the other ranks' copies are refreshed from it every round.
 /// A rank that is not there within options.timeout_s, or died, makes these calls throw
@@ -41,12 +53,14 @@ class RankSync {
     return seq % static_cast<uint64_t>(options_.world_size) ==
            static_cast<uint64_t>(options_.rank);
   }
-  /// Collective: the smallest `frames` over the ranks (the round trains on that many frames of
-  /// every rank's snapshot, so every shard weighs the same in the averaged gradients).
-  size_t AgreeFrames(size_t frames);
-  /// Collective: rank 0's `checkpoint` file (which rank 0 must have) becomes every other
-  /// rank's `checkpoint` (written atomically).
-  void ShareCheckpoint(const std::string& checkpoint);
+  /// Collective between rounds: `ready_frames` is this rank's snapshot size when it holds its
+  /// min_frames, else 0; `stopping` / `finished`: this rank leaves after this poll (Stop(), or
+  /// its max_rounds). The round then trains on the first RoundPoll::frames frames of every
+  /// rank's snapshot, so every shard weighs the same in the averaged gradients.
+  RoundPoll Poll(size_t ready_frames, bool stopping, bool finished);
+  /// Collective: rank 0's `checkpoint` file becomes every other rank's `checkpoint` (written
+  /// atomically). False on every rank (nothing written) when rank 0 has none yet.
+  bool ShareCheckpoint(const std::string& checkpoint);
 
  private:
   model::DistributedOptions options_;

@@ -84,6 +84,9 @@ TrainerNode::TrainerNode(const runtime::NodeArgs& args) : Node("trainer", args) 
           Log().warn("{}", model::PoseDependenceWarning(pose_dependence));
       },
       [this](const msgs::pb::TrainerStatus& s) {
+        // The loop's last status says what ended it (a lost rank, or another rank's stop).
+        if ((s.phase() == "error" || s.phase() == "stopped") && !s.error().empty())
+          Log().warn("training ended (phase {}): {}", s.phase(), s.error());
         if (!closing_) status_pub_->Publish(s);
       });
   if (options.trainer_status_period > 0)

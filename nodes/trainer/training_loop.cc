@@ -10,8 +10,6 @@
 
 #include <nlohmann/json.hpp>
 
-#include "model/trainer.h"
-#include "nodes/trainer/rank_sync.h"
 #include "scene/capture.h"
 #include "scene/trajectory_io.h"
 
@@ -122,6 +120,11 @@ std::string TrainingLoop::Error() const {
   return error_;
 }
 
+std::string TrainingLoop::StopReason() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return stop_reason_;
+}
+
 msgs::pb::TrainerStatus TrainingLoop::LastStatus() const {
   std::lock_guard<std::mutex> lock(mutex_);
   msgs::pb::TrainerStatus s = status_;
@@ -174,7 +177,7 @@ void TrainingLoop::ReadLosses() {
 void TrainingLoop::Main() {
   try {
     RunRounds();
-    SetPhase(stop_ ? "stopped" : "done");
+    SetPhase(stop_ || !StopReason().empty() ? "stopped" : "done");
   } catch (const std::exception& e) {
     {
       std::lock_guard<std::mutex> lock(mutex_);
@@ -192,8 +195,9 @@ void TrainingLoop::Main() {
 
 void TrainingLoop::WriteFirstCheckpoint(const scene::RgbdDataset& train,
                                         const scene::RgbdDataset& val) {
-  // A 0-step run of this process alone: checkpoint.pt with the weights at step 0 and the pose
-  // normaliser of these frames, which every rank then resumes from.
+  // A 0-step run of every rank together (model::Trainer's data-parallel fresh start): rank 0
+  // writes checkpoint.pt with the weights at step 0 and the pose normaliser of every rank's
+  // frames (their bounds all-reduced), which every rank then resumes from.
   model::TrainerOptions t;
   t.out_dir = options_.work_dir;
   t.phase = 1;
@@ -201,122 +205,189 @@ void TrainingLoop::WriteFirstCheckpoint(const scene::RgbdDataset& train,
   t.threads = options_.threads;
   t.progress = false;
   t.max_val_frames = options_.max_val_frames;
+  t.distributed = options_.distributed;  // with every rank: the normaliser of all ranks' frames
   model::Trainer(options_.config, t).Run(train, val);
 }
 
 void TrainingLoop::RunRounds() {
-  const std::string ckpt = model::Trainer::CheckpointPath(options_.work_dir);
   RankSync ranks(options_.distributed);
-  int step = 0;   // phase-1 step of the checkpoint
-  int step2 = 0;  // phase-2 (ENET) step of the checkpoint
+  Progress progress;
+  // Else a 0-step run reads it from the checkpoint; data-parallel ranks always start so, from
+  // rank 0's checkpoint (StartFromRankZero), whatever their own work dir holds.
+  progress.know_step =
+      !ranks.Enabled() && !fs::exists(model::Trainer::CheckpointPath(options_.work_dir));
+  scene::RgbdDataset all;
+  while (WaitForRound(ranks, progress, &all)) {
+    const RoundData data = HoldOut(all);
+    SetPhase("training");
+    StartFromRankZero(ranks, data);
+    const auto t0 = std::chrono::steady_clock::now();
+    const model::TrainReport report = TrainRound(progress, data);
+    if (report.stopped) {
+      // A partial round: its steps are in checkpoint.pt (the next start resumes from there),
+      // but it is not published as a version. Every rank stopped at this step together.
+      {
+        std::lock_guard<std::mutex> lock(mutex_);
+        status_.set_step(static_cast<uint64_t>(report.phase1_steps));
+      }
+      if (!stop_)
+        StoppedBy("another rank was stopped during a round; every rank stopped at step " +
+                  std::to_string(report.phase1_steps) + " (rank 0 saved checkpoint.pt there)");
+      return;
+    }
+    const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    if (!progress.know_step) {
+      // Resumed (restart / warm start): learn the checkpoint's step, nothing trained yet.
+      progress.step = report.phase1_steps;
+      progress.step2 = report.phase2_steps;
+      progress.know_step = true;
+      continue;
+    }
+    RecordRound(report, seconds, &progress);
+    if (ranks.IsWriter()) PublishVersion(report, data, progress.step);
+    EmitStatus();  // rank 0 publishes the version the ranks trained together; the others none
+  }
+}
+
+bool TrainingLoop::WaitForRound(RankSync& ranks, const Progress& progress,
+                                scene::RgbdDataset* all) {
+  // Every 100 ms until a round can start, in step with the other ranks (RankSync::Poll): a
+  // rank that stops or has run its rounds says so in its last poll, and the others leave at
+  // that same poll.
+  for (;;) {
+    const bool stopping = stop_.load();
+    const bool finished = options_.max_rounds >= 0 && progress.rounds >= options_.max_rounds;
+    *all = buffer_->Snapshot();
+    const size_t have = all->frames.size();
+    RoundPoll poll;
+    try {
+      poll = ranks.Poll(have >= options_.min_frames ? have : 0, stopping, finished);
+    } catch (const std::runtime_error&) {
+      if (stopping || finished) return false;  // leaving anyway; the others are gone
+      throw;
+    }
+    if (stopping || finished) return false;
+    const auto event = [&](int rank, const char* what) {
+      StoppedBy("rank " + std::to_string(rank) + " " + what + " between rounds, so every rank " +
+                "stopped there (step " + std::to_string(progress.step) + ")");
+    };
+    if (poll.stopped_rank >= 0) {
+      event(poll.stopped_rank, "was stopped (its node shut down)");
+      return false;
+    }
+    if (poll.finished_rank >= 0) {
+      event(poll.finished_rank, "ran its max_rounds");
+      return false;
+    }
+    if (poll.frames > 0) {
+      // Each rank trains on the first n frames of its shard, n the smallest shard's size, so
+      // every shard weighs the same.
+      all->frames.erase(all->frames.begin() + std::min(all->frames.size(), poll.frames),
+                        all->frames.end());
+      return true;
+    }
+    SetPhase("waiting");
+    std::unique_lock<std::mutex> lock(mutex_);
+    cv_.wait_for(lock, std::chrono::milliseconds(100), [this] { return stop_.load(); });
+  }
+}
+
+void TrainingLoop::StoppedBy(const std::string& reason) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  stop_reason_ = "data-parallel training: " + reason +
+                 ". Rank 0's checkpoint.pt and versions are intact: start every rank again to "
+                 "continue (each resumes from rank 0's checkpoint).";
+  status_.set_error(stop_reason_);  // phase "stopped": what stopped it
+}
+
+TrainingLoop::RoundData TrainingLoop::HoldOut(const scene::RgbdDataset& all) const {
+  RoundData data;
+  data.train.camera = data.val.camera = all.camera;
+  const size_t n = all.frames.size();
+  const size_t every = static_cast<size_t>(options_.val_every_nth);
+  const bool hold_out = n >= 2 * every;
+  for (size_t i = 0; i < n; ++i) {
+    if (hold_out && i % every == every / 2)
+      data.val.frames.push_back(all.frames[i]);
+    else
+      data.train.frames.push_back(all.frames[i]);
+  }
+  return data;
+}
+
+void TrainingLoop::StartFromRankZero(RankSync& ranks, const RoundData& data) {
+  // Every rank resumes from rank 0's checkpoint.pt. A fresh rank 0 (none yet): all ranks
+  // first run a 0-step round together (WriteFirstCheckpoint), then share what rank 0 wrote.
+  if (!ranks.Enabled()) return;
+  const std::string ckpt = model::Trainer::CheckpointPath(options_.work_dir);
+  if (ranks.ShareCheckpoint(ckpt)) return;
+  WriteFirstCheckpoint(data.train, data.val);
+  if (!ranks.ShareCheckpoint(ckpt))
+    throw std::runtime_error("data-parallel training: rank 0 wrote no first checkpoint " + ckpt);
+}
+
+model::TrainReport TrainingLoop::TrainRound(const Progress& progress, const RoundData& data) {
+  const std::string ckpt = model::Trainer::CheckpointPath(options_.work_dir);
   const bool enet = options_.config.enet && !options_.config.IsBaseline() &&
                     options_.enet_steps_per_round != 0;
   const int enet_steps =
       options_.enet_steps_per_round < 0 ? options_.steps_per_round : options_.enet_steps_per_round;
-  // Else a 0-step run reads it from the checkpoint; data-parallel ranks always start so, from
-  // rank 0's checkpoint (ShareCheckpoint below), whatever their own work dir holds.
-  bool know_step = !ranks.Enabled() && !fs::exists(ckpt);
-  int rounds = 0;
-  while (!stop_ && (options_.max_rounds < 0 || rounds < options_.max_rounds)) {
-    scene::RgbdDataset all = buffer_->Snapshot();
-    if (all.frames.size() < options_.min_frames) {
-      SetPhase("waiting");
-      std::unique_lock<std::mutex> lock(mutex_);
-      cv_.wait_for(lock, std::chrono::milliseconds(100), [this] { return stop_.load(); });
-      continue;
-    }
-    // Every rank's round starts here together; each trains on the first n frames of its
-    // shard, n the smallest shard's size, so every shard weighs the same.
-    all.frames.erase(all.frames.begin() + ranks.AgreeFrames(all.frames.size()), all.frames.end());
-    scene::RgbdDataset train, val;
-    train.camera = val.camera = all.camera;
-    const size_t n = all.frames.size();
-    const size_t every = static_cast<size_t>(options_.val_every_nth);
-    const bool hold_out = n >= 2 * every;
-    for (size_t i = 0; i < n; ++i) {
-      if (hold_out && i % every == every / 2)
-        val.frames.push_back(all.frames[i]);
-      else
-        train.frames.push_back(all.frames[i]);
-    }
-    SetPhase("training");
-    if (ranks.Enabled()) {
-      if (ranks.IsWriter() && !fs::exists(ckpt)) WriteFirstCheckpoint(train, val);
-      ranks.ShareCheckpoint(ckpt);
-    }
-    model::TrainerOptions t;
-    t.out_dir = options_.work_dir;
-    t.phase = enet ? 0 : 1;
-    t.steps = know_step ? step + options_.steps_per_round : 0;
-    t.steps_phase2 = know_step ? step2 + enet_steps : 0;
-    t.threads = options_.threads;
-    t.resume = fs::exists(ckpt);
-    t.progress = false;
-    t.max_val_frames = options_.max_val_frames;
-    // Polled between steps: on Stop() the trainer saves checkpoint.pt at the current step
-    // (atomically) and returns, so shutdown never abandons a round.
-    t.should_stop = [this] { return stop_.load(); };
-    t.distributed = options_.distributed;  // every step's gradients averaged over the ranks
-    const auto t0 = std::chrono::steady_clock::now();
-    model::Trainer trainer(options_.config, t);
-    const model::TrainReport report = trainer.Run(train, val);
-    if (report.stopped) {
-      // A partial round: its steps are in checkpoint.pt (the next start resumes from there),
-      // but it is not published as a version.
-      std::lock_guard<std::mutex> lock(mutex_);
-      status_.set_step(static_cast<uint64_t>(report.phase1_steps));
-      break;
-    }
-    const double seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    if (!know_step) {
-      // Resumed (restart / warm start): learn the checkpoint's step, nothing trained yet.
-      step = report.phase1_steps;
-      step2 = report.phase2_steps;
-      know_step = true;
-      continue;
-    }
-    const int done = report.phase1_steps - step;
-    const double pose_dependence =
-        std::isfinite(report.val_pose_dependence) ? report.val_pose_dependence : -1.0;
-    step = report.phase1_steps;
-    step2 = report.phase2_steps;
-    ++rounds;
-    ReadLosses();
-    {
-      std::lock_guard<std::mutex> lock(mutex_);
-      status_.set_step(static_cast<uint64_t>(step));
-      status_.set_steps_per_s(seconds > 0 ? done / seconds : 0.0);
-    }
-    if (!ranks.IsWriter()) {  // rank 0 publishes the version the ranks trained together
-      EmitStatus();
-      continue;
-    }
-    // Publish: a versioned copy, written atomically, that this loop never rewrites.
-    const uint64_t version = version_ + 1;
-    const std::string path = VersionPath(options_.work_dir, version);
-    // The poses this model was trained on (the synthesizer's coverage score), then the model.
-    const std::string poses_path = PosesPath(path);
-    std::vector<scene::StampedPose> poses;
-    poses.reserve(train.frames.size());
-    for (const auto& f : train.frames) poses.push_back({f.stamp, f.pose});
-    scene::WriteTumTrajectory(poses_path, poses,
-                              "training poses of model version " + std::to_string(version));
-    scene::WriteFileAtomic(path, ReadFile(report.checkpoint_path));
-    version_ = version;
-    msgs::pb::ModelVersion mv;
-    mv.set_version(version);
-    mv.set_checkpoint_path(path);
-    mv.set_poses_path(poses_path);
-    mv.set_step(static_cast<uint64_t>(step));
-    mv.set_method("p2i_net");
-    mv.set_val_psnr(report.val_psnr);
-    pose_dependence_ = pose_dependence;
-    mv.set_width(static_cast<uint32_t>(options_.config.resolution));
-    mv.set_height(static_cast<uint32_t>(options_.config.resolution));
-    if (on_version_) on_version_(mv);
-    EmitStatus();
-  }
+  model::TrainerOptions t;
+  t.out_dir = options_.work_dir;
+  t.phase = enet ? 0 : 1;
+  t.steps = progress.know_step ? progress.step + options_.steps_per_round : 0;
+  t.steps_phase2 = progress.know_step ? progress.step2 + enet_steps : 0;
+  t.threads = options_.threads;
+  t.resume = fs::exists(ckpt);
+  t.progress = false;
+  t.max_val_frames = options_.max_val_frames;
+  // Polled between steps: on Stop() the trainer saves checkpoint.pt at the current step
+  // (atomically) and returns, so shutdown never abandons a round.
+  t.should_stop = [this] { return stop_.load(); };
+  t.distributed = options_.distributed;  // every step's gradients averaged over the ranks
+  model::Trainer trainer(options_.config, t);
+  return trainer.Run(data.train, data.val);
+}
+
+void TrainingLoop::RecordRound(const model::TrainReport& report, double seconds,
+                               Progress* progress) {
+  const int done = report.phase1_steps - progress->step;
+  progress->step = report.phase1_steps;
+  progress->step2 = report.phase2_steps;
+  ++progress->rounds;
+  pose_dependence_ =
+      std::isfinite(report.val_pose_dependence) ? report.val_pose_dependence : -1.0;
+  ReadLosses();
+  std::lock_guard<std::mutex> lock(mutex_);
+  status_.set_step(static_cast<uint64_t>(progress->step));
+  status_.set_steps_per_s(seconds > 0 ? done / seconds : 0.0);
+}
+
+void TrainingLoop::PublishVersion(const model::TrainReport& report, const RoundData& data,
+                                  int step) {
+  // A versioned copy, written atomically, that this loop never rewrites.
+  const uint64_t version = version_ + 1;
+  const std::string path = VersionPath(options_.work_dir, version);
+  // The poses this model was trained on (the synthesizer's coverage score), then the model.
+  const std::string poses_path = PosesPath(path);
+  std::vector<scene::StampedPose> poses;
+  poses.reserve(data.train.frames.size());
+  for (const auto& f : data.train.frames) poses.push_back({f.stamp, f.pose});
+  scene::WriteTumTrajectory(poses_path, poses,
+                            "training poses of model version " + std::to_string(version));
+  scene::WriteFileAtomic(path, ReadFile(report.checkpoint_path));
+  version_ = version;
+  msgs::pb::ModelVersion mv;
+  mv.set_version(version);
+  mv.set_checkpoint_path(path);
+  mv.set_poses_path(poses_path);
+  mv.set_step(static_cast<uint64_t>(step));
+  mv.set_method("p2i_net");
+  mv.set_val_psnr(report.val_psnr);
+  mv.set_width(static_cast<uint32_t>(options_.config.resolution));
+  mv.set_height(static_cast<uint32_t>(options_.config.resolution));
+  if (on_version_) on_version_(mv);
 }
 
 }  // namespace p2i::trainer

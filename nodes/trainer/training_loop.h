@@ -14,7 +14,9 @@
 
 #include "model/distributed.h"
 #include "model/p2i_config.h"
+#include "model/trainer.h"
 #include "msgs/p2i.pb.h"
+#include "nodes/trainer/rank_sync.h"
 #include "nodes/trainer/replay_buffer.h"
 
 namespace p2i::trainer {
@@ -39,14 +41,18 @@ namespace p2i::trainer {
 /// Published versions are never touched again.
 ///
 /// Data-parallel (`distributed.world_size` > 1, docs/DISTRIBUTED.md): one loop per rank
-/// process, each on its own buffer (the node keeps the rank's shard of the frames). Every
-/// round starts with RankSync's collectives (nodes/trainer/rank_sync.h): the ranks agree on
-/// the round's frame count n (the smallest snapshot; each trains on the first n frames of its
-/// own) and every rank resumes from rank 0's checkpoint (for a fresh start rank 0 first writes
-/// a 0-step one alone, so the pose normaliser is rank 0's); model::Trainer then averages the
-/// gradients of every step. Only rank 0 writes versions and poses and calls `on_version`. A rank
-/// that died or timed out ends the loop with the "lost contact" error (Error(), and phase
-/// "error" with that `error` in TrainerStatus); a stop of any rank stops all at the same step.
+/// process, each on its own buffer (the node keeps the rank's shard of the frames). Between
+/// rounds the ranks poll each other every 100 ms (RankSync::Poll, nodes/trainer/rank_sync.h):
+/// a round starts on all of them at once when every rank holds min_frames, on the round's
+/// frame count n (the smallest snapshot; each trains on the first n frames of its own), and
+/// every rank resumes from rank 0's checkpoint (for a fresh start all ranks first run a 0-step
+/// round together, so the pose normaliser is that of every rank's frames); model::Trainer
+/// then averages the gradients of every step and takes its divergence rollbacks on all ranks
+/// together. Only rank 0 writes versions and poses and calls `on_version`. A rank that died
+/// or timed out ends the loop with the "lost contact" error (Error(), and phase "error" with
+/// that `error` in TrainerStatus). A stop of any rank stops all: during a round at the same
+/// step, between rounds at the same poll; the others end in phase "stopped" with TrainerStatus
+/// `error` saying which rank stopped (StopReason()).
 ///
 /// Thread-safety: Start/Stop from one thread; callbacks run on the training thread (the caller
 /// must make them thread-safe, e.g. with locking publishers); LastStatus() is thread-safe.
@@ -85,6 +91,8 @@ class TrainingLoop {
   bool Finished() const { return finished_; }
   /// The error that ended the thread ("" if none).
   std::string Error() const;
+  /// Data-parallel: why this loop stopped when another rank's stop ended it ("" otherwise).
+  std::string StopReason() const;
   msgs::pb::TrainerStatus LastStatus() const;
   uint64_t LastVersion() const { return version_; }
   /// Pose-dependence score (model/pose_dependence.h) of the last published version's validation;
@@ -97,8 +105,27 @@ class TrainingLoop {
   static std::string PosesPath(const std::string& version_path);
 
  private:
+  /// A round's frames: every val_every_nth one held out once there are 2 * val_every_nth.
+  struct RoundData {
+    scene::RgbdDataset train, val;
+  };
+  /// Where the rounds are: the checkpoint's steps (known after the first round when resuming).
+  struct Progress {
+    int step = 0;   ///< phase-1 step of the checkpoint
+    int step2 = 0;  ///< phase-2 (ENET) step of the checkpoint
+    bool know_step = false;
+    int rounds = 0;
+  };
+
   void Main();
   void RunRounds();
+  bool WaitForRound(RankSync& ranks, const Progress& progress, scene::RgbdDataset* all);
+  void StoppedBy(const std::string& reason);
+  RoundData HoldOut(const scene::RgbdDataset& all) const;
+  void StartFromRankZero(RankSync& ranks, const RoundData& data);
+  model::TrainReport TrainRound(const Progress& progress, const RoundData& data);
+  void RecordRound(const model::TrainReport& report, double seconds, Progress* progress);
+  void PublishVersion(const model::TrainReport& report, const RoundData& data, int step);
   void SetPhase(const std::string& phase);
   void EmitStatus();
   void ReadLosses();
@@ -117,6 +144,7 @@ class TrainingLoop {
   std::condition_variable cv_;
   msgs::pb::TrainerStatus status_;
   std::string error_;
+  std::string stop_reason_;
 };
 
 }  // namespace p2i::trainer

@@ -3,7 +3,9 @@
 /// fed frames by the test: rank 0 publishes the versions and rank 1 none, both report their
 /// rank, each trains on its own shard, every step's gradients were all-reduced on both ranks
 /// and each round started from rank 0's checkpoint; rank 1 SIGKILLed mid-run ends rank 0's
-/// training with "lost contact" in its TrainerStatus and leaves its last version loadable.
+/// training with "lost contact" in its TrainerStatus and leaves its last version loadable; a
+/// rank stopped (SIGTERM) between rounds or mid-run ends the other's training cleanly, in
+/// phase "stopped" with which rank stopped it, not "lost contact".
 #include <catch2/catch.hpp>
 
 #include <signal.h>
@@ -71,6 +73,14 @@ class Harness {
       pub_->Publish(m);
       for (int k = 0; k < 10; ++k) node_.SpinOnce(std::chrono::milliseconds(2));
     }
+    return done();
+  }
+
+  /// Spins without publishing frames until `done()` or `limit`.
+  bool SpinUntil(const std::function<bool()>& done, std::chrono::seconds limit) {
+    const auto deadline = std::chrono::steady_clock::now() + limit;
+    while (std::chrono::steady_clock::now() < deadline && !done())
+      node_.SpinOnce(std::chrono::milliseconds(20));
     return done();
   }
 
@@ -241,5 +251,78 @@ TEST_CASE("p2i_trainer world_size 2: rank 1 SIGKILLed mid-run ends rank 0's trai
   CHECK(code == 0);
   CHECK(fs::exists(dir + "/exported.pt"));
   CHECK(r0->Terminate() == 0);  // the node outlives its training's end and stops cleanly
+  fs::remove_all(dir);
+}
+
+TEST_CASE("p2i_trainer world_size 2: rank 1 stopped between rounds ends rank 0's training "
+          "cleanly, with a stop message instead of 'lost contact'",
+          "[integration]") {
+  runtime::Shutdown::ResetForTesting();
+  runtime::testing::ScopedRunDir run_dir;
+  const std::string dir = trainer::testing::TempDir("dp_stop");
+  std::ofstream(dir + "/tiny.yaml") << trainer::testing::TinyConfig().ToYamlString();
+  const scene::RgbdDataset sim = trainer::testing::SimFrames(16);
+  Harness h(sim);
+  const std::string port = Port(2);
+  auto r0 = StartRank(dir, 0, port, "");
+  auto r1 = StartRank(dir, 1, port, "");
+  // No frames: both ranks met (the first poll is the rendezvous) and wait between rounds.
+  const bool waiting = h.SpinUntil(
+      [&] { return h.Status(0).phase() == "waiting" && h.Status(1).phase() == "waiting"; },
+      std::chrono::seconds(60));
+  INFO("rank 0:\n" << p2i::testing::ReadFile(dir + "/rank0.log") << "\nrank 1:\n"
+                   << p2i::testing::ReadFile(dir + "/rank1.log"));
+  REQUIRE(waiting);
+  CHECK(r1->Terminate() == 0);  // SIGTERM: the node's shutdown
+  // Well within dist_timeout (30 s): rank 0 learns it at the next poll, not by a timeout.
+  const bool ended = h.SpinUntil([&] { return h.Status(0).phase() == "stopped"; },
+                                 std::chrono::seconds(15));
+  INFO("rank 0 after rank 1's stop:\n" << p2i::testing::ReadFile(dir + "/rank0.log"));
+  REQUIRE(ended);
+  const auto s = h.Status(0);
+  CHECK(s.error().find("rank 1 was stopped (its node shut down) between rounds") !=
+        std::string::npos);
+  CHECK(s.error().find("lost contact") == std::string::npos);
+  CHECK(p2i::testing::ReadFile(dir + "/rank0.log").find("rank 1 was stopped") !=
+        std::string::npos);  // the node logs why its training ended
+  CHECK(r0->Terminate() == 0);
+  fs::remove_all(dir);
+}
+
+TEST_CASE("p2i_trainer world_size 2: rank 0 stopped mid-run ends rank 1's training cleanly, and "
+          "rank 0's checkpoint loads",
+          "[integration]") {
+  runtime::Shutdown::ResetForTesting();
+  runtime::testing::ScopedRunDir run_dir;
+  const std::string dir = trainer::testing::TempDir("dp_stop_run");
+  std::ofstream(dir + "/tiny.yaml") << trainer::testing::TinyConfig().ToYamlString();
+  const scene::RgbdDataset sim = trainer::testing::SimFrames(16);
+  Harness h(sim);
+  const std::string port = Port(3);
+  auto r0 = StartRank(dir, 0, port, "");
+  auto r1 = StartRank(dir, 1, port, "");
+  const bool trained =
+      h.RunUntil([&] { return h.HighestVersion(0) >= 2; }, std::chrono::seconds(120));
+  INFO("rank 0:\n" << p2i::testing::ReadFile(dir + "/rank0.log") << "\nrank 1:\n"
+                   << p2i::testing::ReadFile(dir + "/rank1.log"));
+  REQUIRE(trained);
+  // During a round (the per-step stop flag) or between rounds (the poll): either way clean.
+  CHECK(r0->Terminate() == 0);
+  const bool ended = h.SpinUntil([&] { return h.Status(1).phase() == "stopped"; },
+                                 std::chrono::seconds(15));
+  INFO("rank 1 after rank 0's stop:\n" << p2i::testing::ReadFile(dir + "/rank1.log"));
+  REQUIRE(ended);
+  const auto s = h.Status(1);
+  CHECK((s.error().find("rank 0 was stopped") != std::string::npos ||
+         s.error().find("another rank was stopped during a round") != std::string::npos));
+  CHECK(s.error().find("lost contact") == std::string::npos);
+  int code = -1;
+  const std::string out = p2i::testing::RunCommand(
+      "'" + p2i::testing::BinDir() + "/p2i' export '" + dir + "/r0/checkpoint.pt' --out '" +
+          dir + "/exported.pt' 2>&1",
+      &code);
+  INFO(out);
+  CHECK(code == 0);
+  CHECK(r1->Terminate() == 0);
   fs::remove_all(dir);
 }
