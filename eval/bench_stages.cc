@@ -252,7 +252,7 @@ void Evaluate(model::ViewSynthesizer& method, const scene::RgbdDataset& test,
     rec.Stop();
     if (v.rgb.size() != gt.rgb.size()) cv::resize(v.rgb, v.rgb, gt.rgb.size(), 0, 0, cv::INTER_AREA);
     if (!v.depth.empty() && v.depth.size() != gt.depth.size())
-      cv::resize(v.depth, v.depth, gt.depth.size(), 0, 0, cv::INTER_NEAREST);
+      cv::resize(v.depth, v.depth, gt.depth.size(), 0, 0, cv::INTER_NEAREST_EXACT);
     ViewRecord rec_view;
     rec_view.id = gt.id;
     rec_view.psnr = model::Psnr(v.rgb, gt.rgb);

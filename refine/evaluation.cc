@@ -51,22 +51,13 @@ struct Acc {
   }
 };
 
+/// The frames resized to w x h with their calibration (CameraInfo::Scaled: pixel centres at
+/// integers, as cv::resize samples them; scaling the principal point by the size ratio alone put
+/// it a quarter pixel off at half size).
 scene::RgbdDataset Resized(const scene::RgbdDataset& d, int w, int h) {
   if (w <= 0 || h <= 0) return d;
   scene::RgbdDataset out;
-  out.camera = d.camera;
-  const double sx = static_cast<double>(w) / d.camera.image_width;
-  const double sy = static_cast<double>(h) / d.camera.image_height;
-  out.camera.image_width = w;
-  out.camera.image_height = h;
-  out.camera.camera_matrix[0] *= sx;
-  out.camera.camera_matrix[2] *= sx;
-  out.camera.camera_matrix[4] *= sy;
-  out.camera.camera_matrix[5] *= sy;
-  out.camera.projection_matrix[0] *= sx;
-  out.camera.projection_matrix[2] *= sx;
-  out.camera.projection_matrix[5] *= sy;
-  out.camera.projection_matrix[6] *= sy;
+  out.camera = d.camera.Scaled(w, h);
   for (const auto& f : d.frames) out.frames.push_back(scene::ResizeSample(f, w, h));
   return out;
 }

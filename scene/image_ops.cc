@@ -47,7 +47,11 @@ RgbdSample ResizeSample(const RgbdSample& sample, int out_width, int out_height)
     cv::resize(sample.rgb, out.rgb, size, 0, 0, shrink ? cv::INTER_AREA : cv::INTER_LINEAR);
   }
   if (!sample.depth.empty()) {
-    cv::resize(sample.depth, out.depth, size, 0, 0, cv::INTER_NEAREST);
+    // INTER_NEAREST_EXACT, not INTER_NEAREST: OpenCV's INTER_NEAREST takes source pixel
+    // floor(x * scale), which is not the pixel under the output pixel's centre (that is
+    // floor((x + 0.5) * scale)): shrinking 480 -> 128 shifted the depth 0.37 output pixels up and
+    // left of the colour (INTER_AREA/INTER_LINEAR are centre-aligned) and of the calibration.
+    cv::resize(sample.depth, out.depth, size, 0, 0, cv::INTER_NEAREST_EXACT);
   }
   return out;
 }

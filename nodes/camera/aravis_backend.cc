@@ -413,7 +413,7 @@ class AravisBackend : public LiveBackend {
     cv::Mat depth = best->depth;
     if (depth.size() != size) {
       cv::Mat resized;
-      cv::resize(depth, resized, size, 0, 0, cv::INTER_NEAREST);
+      cv::resize(depth, resized, size, 0, 0, cv::INTER_NEAREST_EXACT);  // centre-aligned (image_ops.cc)
       depth = resized;
     }
     return depth;

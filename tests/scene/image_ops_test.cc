@@ -1,5 +1,6 @@
 /// @file image_ops_test.cc
 /// @brief Centre crop + resize of RGB-D samples and the matching intrinsics.
+#include <cmath>
 #include <set>
 
 #include <catch2/catch.hpp>
@@ -40,6 +41,28 @@ TEST_CASE("Depth is resized with nearest neighbour: no blends across edges or ho
   }
   CHECK(values == std::set<float>{0.0f, 1.0f, 4.0f});
   CHECK(out.rgb.at<cv::Vec3b>(64, 64) == cv::Vec3b(1, 2, 3));
+}
+
+TEST_CASE("Depth and colour are resized onto the same pixel centres (depth takes the source pixel under each output centre)", "[unit]") {
+  // depth = the source column (and row) index, rgb = a sharp vertical edge: after the resize the
+  // depth at output pixel x is the source pixel under x's centre, (x + 0.5) * scale - 0.5 rounded,
+  // as the colour's centre-aligned resize and CameraInfo::Scaled place it. OpenCV's INTER_NEAREST
+  // took floor(x * scale) instead: 1.4 source pixels (0.37 output pixels) off at 480 -> 128.
+  RgbdSample s;
+  s.rgb = cv::Mat(480, 480, CV_8UC3, cv::Scalar(0, 0, 0));
+  s.depth = cv::Mat(480, 480, CV_32FC1);
+  for (int r = 0; r < 480; ++r)
+    for (int c = 0; c < 480; ++c) s.depth.at<float>(r, c) = 1.0f + c + 1000.0f * r;
+  const RgbdSample out = ResizeSample(s, 128, 128);
+  const double scale = 480.0 / 128.0;
+  for (int x : {0, 1, 17, 64, 100, 127}) {
+    const double centre = (x + 0.5) * scale - 0.5;  // source coordinate of the output centre
+    const float d = out.depth.at<float>(x, x);
+    const double col = std::fmod(d - 1.0, 1000.0), row = std::floor((d - 1.0) / 1000.0);
+    INFO("output pixel " << x << ": source column " << col << ", centre " << centre);
+    CHECK(std::abs(col - centre) <= 0.5 + 1e-9);
+    CHECK(std::abs(row - centre) <= 0.5 + 1e-9);
+  }
 }
 
 TEST_CASE("Centre crop keeps the centre pixel and the camera sees it at the same place",

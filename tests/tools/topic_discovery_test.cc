@@ -68,8 +68,12 @@ TEST_CASE("A graph split over two launchers finds its topics through their regis
   // From an empty run dir, only the peers can tell where anything is.
   const std::string p2i = "env P2I_RUN_DIR=" + tmp + "/empty " + p2i::testing::BinDir() + "/p2i";
   const std::string peers = " --peer tcp://127.0.0.1:" + pa + " --peer tcp://127.0.0.1:" + pb;
-  const std::string list = Until(p2i + " topic list -v" + peers + " 2>&1", "/rgbd");
+  // Both launchers start at once and either may be up first: wait for a topic of each (waiting
+  // for machine a's /rgbd alone failed once on a loaded box, machine b's /pose not yet there).
+  Until(p2i + " topic list -v" + peers + " 2>&1", "/rgbd");
+  const std::string list = Until(p2i + " topic list -v" + peers + " 2>&1", "/pose ");
   INFO(list);
+  CHECK(list.find("/rgbd") != std::string::npos);
   CHECK(list.find("/pose ") != std::string::npos);
   CHECK(list.find("via tcp://127.0.0.1:" + pa) != std::string::npos);
   CHECK(list.find("via tcp://127.0.0.1:" + pb) != std::string::npos);
