@@ -162,7 +162,10 @@ std::string HandshakeReason(uint16_t event, uint32_t value) {
       }
     }
   }
-  return "malformed handshake (no detail)";
+  // libzmq gives no reason when the peer hangs up mid-handshake: a plain client that read our
+  // CURVE greeting first does exactly that (and does not come back), as does a dropped link.
+  return "malformed handshake or one the peer abandoned (no detail: e.g. a plain client that hung "
+         "up on the CURVE greeting, or a dropped connection)";
 }
 
 void MonitorLoop() {
