@@ -34,13 +34,6 @@ const std::vector<std::string>& FusionOptionKeys() {
   return keys;
 }
 
-model::MethodFactory ConfigureFusion(const YAML::Node& options, const std::string& source) {
-  const FusionOptions o = ReadOptions(options, source);
-  return [o](const model::MethodInputs& in) -> std::unique_ptr<model::ViewSynthesizer> {
-    return std::make_unique<FusionSynthesizer>(Frames(in, "fusion"), o);
-  };
-}
-
 model::MethodFactory ConfigureOpen3dTsdf(const YAML::Node& options, const std::string& source) {
   const FusionOptions o = ReadOptions(options, source);
   return [o](const model::MethodInputs& in) -> std::unique_ptr<model::ViewSynthesizer> {

@@ -1,6 +1,7 @@
 /// @file fusion_methods.h
-/// @brief The registry entries of this library's methods (model/method_registry.cc lists them):
-/// how `fusion` and `open3d_tsdf` read their options and build over the training frames.
+/// @brief The registry entry of `open3d_tsdf` (model/method_registry.cc lists it) and the option
+/// keys it shares with `fusion` (whose entry, with the learned refinement, is
+/// refine/fusion_method.h).
 #pragma once
 
 #include <string>
@@ -18,9 +19,8 @@ const std::vector<std::string>& FusionOptionKeys();
 
 /// Read {tsdf: {...}, blend: {...}, fill_holes: bool} (null = defaults, fill_holes on), check
 /// them once (bad keys or values throw std::runtime_error naming `source`, the line and the key)
-/// and return a factory building `fusion` (TSDF + keyframe blending) or `open3d_tsdf` (Open3D's
-/// voxel-colour raycast of the same TSDF) over MethodInputs::training, all frames integrated.
-model::MethodFactory ConfigureFusion(const YAML::Node& options, const std::string& source);
+/// and return a factory building `open3d_tsdf` (Open3D's voxel-colour raycast of the TSDF) over
+/// MethodInputs::training, all frames integrated.
 model::MethodFactory ConfigureOpen3dTsdf(const YAML::Node& options, const std::string& source);
 
 }  // namespace p2i::fusion

@@ -10,6 +10,7 @@
 #include "model/baseline_nearest.h"
 #include "model/baseline_warp.h"
 #include "model/p2i_synthesizer.h"
+#include "refine/fusion_method.h"
 #include "scene/strict_yaml_reader.h"
 
 namespace p2i::model {
@@ -76,8 +77,8 @@ std::vector<MethodInfo> MakeTable() {
   t.push_back({"warp", {}, "depth warp (DIBR) of the k nearest training frames", false, "", "",
                {"k", "metres_per_degree", "z_tolerance", "fill_holes"}, ConfigureWarp});
   t.push_back({"fusion", {}, "TSDF geometry (raycast) coloured by view-dependent blending of the k "
-               "best visible keyframes (fusion/)", false, "", "", fusion::FusionOptionKeys(),
-               fusion::ConfigureFusion});
+               "best visible keyframes (fusion/), optionally refined by a learned U-Net (refine/)",
+               false, "", "", refine::FusionMethodOptionKeys(), refine::ConfigureFusionMethod});
   t.push_back({"open3d_tsdf", {}, "Open3D's own voxel-colour raycast of the same TSDF (fusion/)",
                false, "", "", fusion::FusionOptionKeys(), fusion::ConfigureOpen3dTsdf});
   return t;

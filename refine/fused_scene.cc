@@ -36,9 +36,20 @@ fusion::FusionSceneOptions ToFusionOptions(const FusedSceneOptions& o) {
   return f;
 }
 
+FusedSceneOptions FromFusionOptions(const fusion::FusionSceneOptions& f) {
+  FusedSceneOptions o;
+  o.voxel_size_m = f.tsdf.voxel_size_m;
+  o.sdf_trunc_m = f.tsdf.trunc_voxels * f.tsdf.voxel_size_m;
+  o.depth_max_m = f.tsdf.depth_max_m;
+  o.k = f.blend.k;
+  return o;
+}
+
 class SceneOverFusion : public FusedScene {
  public:
   explicit SceneOverFusion(const FusedSceneOptions& o) : options_(o), fusion_options_(ToFusionOptions(o)) {}
+  explicit SceneOverFusion(const fusion::FusionSceneOptions& f)
+      : options_(FromFusionOptions(f)), fusion_options_(f) {}
 
   void Integrate(const scene::RgbdSample& frame, const scene::CameraInfo& camera) override {
     Scene(camera).tsdf().Integrate(frame, camera);
@@ -77,6 +88,11 @@ class SceneOverFusion : public FusedScene {
 }  // namespace
 
 std::unique_ptr<FusedScene> MakeFusedScene(const FusedSceneOptions& options) {
+  options.Validate();
+  return std::make_unique<SceneOverFusion>(options);
+}
+
+std::unique_ptr<FusedScene> MakeFusedScene(const fusion::FusionSceneOptions& options) {
   options.Validate();
   return std::make_unique<SceneOverFusion>(options);
 }

@@ -7,6 +7,7 @@
 #include <memory>
 #include <string>
 
+#include "fusion/fusion_scene.h"
 #include "fusion/view_candidates.h"
 #include "scene/camera_info.h"
 #include "scene/rgbd_sample.h"
@@ -39,5 +40,9 @@ class FusedScene {
 
 /// Over the fusion code (fusion/). Throws std::invalid_argument on bad options.
 std::unique_ptr<FusedScene> MakeFusedScene(const FusedSceneOptions& options);
+/// The same with the `fusion` method's own full options (every tsdf and blend key as the method
+/// was configured): the refinement then trains on the candidates the method will render.
+/// options() reports the voxel size, truncation, depth range and k of `options`.
+std::unique_ptr<FusedScene> MakeFusedScene(const fusion::FusionSceneOptions& options);
 
 }  // namespace p2i::refine

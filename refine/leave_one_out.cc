@@ -12,7 +12,11 @@ namespace p2i::refine {
 void LeaveOneOutOptions::Validate() const {
   if (folds < 2) throw std::invalid_argument("LeaveOneOutOptions: folds must be >= 2");
   if (keyframe_every < 1) throw std::invalid_argument("LeaveOneOutOptions: keyframe_every must be >= 1");
-  scene.Validate();
+  if (fusion_scene) {
+    fusion_scene->Validate();
+  } else {
+    scene.Validate();
+  }
 }
 
 std::unique_ptr<FusedScene> FuseAll(const scene::RgbdDataset& frames,
@@ -35,7 +39,8 @@ std::vector<model::RefineSample> MakeLeaveOneOutSamples(const scene::RgbdDataset
   std::vector<model::RefineSample> out;
   if (n < 2) return out;
   for (size_t f = 0; f < folds && f < n; ++f) {
-    auto fused = MakeFusedScene(options.scene);
+    auto fused = options.fusion_scene ? MakeFusedScene(*options.fusion_scene)
+                                      : MakeFusedScene(options.scene);
     size_t kept = 0;
     for (size_t i = 0; i < n; ++i) {
       if (i % folds == f) continue;

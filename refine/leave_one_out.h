@@ -4,6 +4,7 @@
 #pragma once
 
 #include <functional>
+#include <optional>
 #include <vector>
 
 #include "model/refiner.h"
@@ -21,7 +22,12 @@ struct LeaveOneOutOptions {
   /// Keyframes: every `keyframe_every`-th frame of the other folds (1 = all of them).
   int keyframe_every = 1;
   FusedSceneOptions scene;
+  /// Set: the folds are fused with these full options of the `fusion` method instead of `scene`
+  /// (refine/fusion_method.cc: a method fine-tunes on the candidates it renders).
+  std::optional<fusion::FusionSceneOptions> fusion_scene;
   void Validate() const;
+  /// The k of the layout the samples have (fusion_scene's blend k when set, else scene.k).
+  int K() const { return fusion_scene ? fusion_scene->blend.k : scene.k; }
 };
 
 /// Samples at `render_camera` (frames are centre-cropped/resized to it as targets; fusion uses

@@ -1,0 +1,162 @@
+/// @file fusion_method.cc
+/// @brief The `fusion` registry entry with its optional refinement (see fusion_method.h).
+#include "refine/fusion_method.h"
+
+#include <sys/stat.h>
+
+#include <cmath>
+#include <memory>
+#include <stdexcept>
+
+#include <yaml-cpp/yaml.h>
+
+#include "fusion/fusion_methods.h"
+#include "fusion/fusion_synthesizer.h"
+#include "model/learned_refiner.h"
+#include "refine/leave_one_out.h"
+#include "scene/strict_yaml_reader.h"
+
+namespace p2i::refine {
+namespace {
+
+bool IsFile(const std::string& path) {
+  struct stat st {};
+  return ::stat(path.c_str(), &st) == 0 && S_ISREG(st.st_mode);
+}
+
+/// `path` as the options' author meant it: relative to the folder of `source` when `source` is a
+/// file (a bench config names files relative to itself), else relative to the working directory.
+std::string ResolveNet(const std::string& path, const std::string& source) {
+  if (path.empty() || path.front() == '/' || !IsFile(source)) return path;
+  const auto slash = source.rfind('/');
+  return slash == std::string::npos ? path : source.substr(0, slash + 1) + path;
+}
+
+int Integer(const scene::StrictYamlReader& r, const YAML::Node& map, const std::string& key,
+            int fallback) {
+  const YAML::Node n = map[key];
+  if (!n.IsDefined() || n.IsNull()) return fallback;
+  const double v = r.Double(n, "refine." + key);
+  if (v != std::floor(v) || std::fabs(v) > 1e9) r.Fail(n, "refine." + key + " must be an integer");
+  return static_cast<int>(v);
+}
+
+const scene::RgbdDataset& Frames(const model::MethodInputs& in) {
+  if (!in.training || in.training->frames.empty() || in.training->frames.front().rgb.empty()) {
+    throw std::invalid_argument("method 'fusion' needs training frames (rgb and depth): give it a dataset");
+  }
+  return *in.training;
+}
+
+/// The refiner of one built method: the named net (or a fresh one), fine-tuned by leave-one-out
+/// on `frames` at the method's output camera when finetune_steps > 0.
+std::shared_ptr<model::LearnedRefiner> BuildRefiner(const FusionRefineOptions& o,
+                                                    const fusion::FusionSceneOptions& scene_options,
+                                                    const scene::RgbdDataset& frames,
+                                                    const scene::CameraInfo& camera, int threads) {
+  const int k = scene_options.blend.k;
+  std::shared_ptr<model::LearnedRefiner> refiner =
+      o.net.empty() ? model::LearnedRefiner::Fresh(k) : model::LearnedRefiner::Load(o.net, k);
+  if (o.finetune_steps <= 0) return refiner;
+  LeaveOneOutOptions loo;
+  loo.folds = o.folds;
+  loo.keyframe_every = o.keyframe_every;
+  loo.fusion_scene = scene_options;
+  const std::vector<model::RefineSample> samples = MakeLeaveOneOutSamples(frames, camera, loo);
+  if (samples.empty()) {
+    throw std::invalid_argument(
+        "method 'fusion': refine.finetune_steps is " + std::to_string(o.finetune_steps) +
+        " but no training frame sees the surface fused from the others (" +
+        std::to_string(frames.frames.size()) +
+        " frames): give overlapping frames, or set refine.finetune_steps: 0");
+  }
+  model::RefineTrainOptions train = o.train;
+  train.steps = o.finetune_steps;
+  train.threads = std::max(1, threads);
+  refiner->refiner().Fit(samples, train);
+  return refiner;
+}
+
+}  // namespace
+
+FusionRefineOptions FusionRefineOptions::FromYaml(const YAML::Node& node, const std::string& source) {
+  const scene::StrictYamlReader r(source);
+  r.CheckKeys(node,
+              {"net", "finetune_steps", "folds", "keyframe_every", "lr", "batch_size", "crop",
+               "ssim_weight", "depth_weight", "seed"},
+              "fusion refine options");
+  FusionRefineOptions o;
+  if (node["net"] && !node["net"].IsNull()) o.net = r.String(node["net"], "refine.net");
+  o.finetune_steps = Integer(r, node, "finetune_steps", o.finetune_steps);
+  o.folds = Integer(r, node, "folds", o.folds);
+  o.keyframe_every = Integer(r, node, "keyframe_every", o.keyframe_every);
+  o.train.batch_size = Integer(r, node, "batch_size", o.train.batch_size);
+  o.train.crop = Integer(r, node, "crop", o.train.crop);
+  const int seed = Integer(r, node, "seed", static_cast<int>(o.train.seed));
+  if (seed < 0) r.Fail(node["seed"], "refine.seed must be >= 0, got " + std::to_string(seed));
+  o.train.seed = static_cast<uint64_t>(seed);
+  r.OptionalDouble(node, "lr", "refine", &o.train.lr);
+  r.OptionalDouble(node, "ssim_weight", "refine", &o.train.ssim_weight);
+  r.OptionalDouble(node, "depth_weight", "refine", &o.train.depth_weight);
+  try {
+    o.Validate();
+  } catch (const std::invalid_argument& e) {
+    r.Fail(node, e.what());
+  }
+  const std::string given = o.net;
+  o.net = ResolveNet(o.net, source);
+  if (!o.net.empty() && !IsFile(o.net)) {
+    r.Fail(node["net"], "refine.net: no refinement file '" + o.net + "'" +
+                            (given != o.net ? " ('" + given + "' relative to " + source + ")" : "") +
+                            ": give the path of a `p2i refine train-sim` output such as "
+                            "models/refine_sim.pt, or drop the key");
+  }
+  return o;
+}
+
+void FusionRefineOptions::Validate() const {
+  const auto fail = [](const std::string& what) {
+    throw std::invalid_argument("FusionRefineOptions: " + what);
+  };
+  if (finetune_steps < 0) fail("finetune_steps must be >= 0, got " + std::to_string(finetune_steps));
+  if (folds < 2) fail("folds must be >= 2, got " + std::to_string(folds));
+  if (keyframe_every < 1) fail("keyframe_every must be >= 1, got " + std::to_string(keyframe_every));
+  model::RefineTrainOptions t = train;
+  t.steps = finetune_steps;
+  t.Validate();
+}
+
+const std::vector<std::string>& FusionMethodOptionKeys() {
+  static const std::vector<std::string> keys = [] {
+    std::vector<std::string> k = fusion::FusionOptionKeys();
+    k.push_back("refine");
+    return k;
+  }();
+  return keys;
+}
+
+model::MethodFactory ConfigureFusionMethod(const YAML::Node& options, const std::string& source) {
+  fusion::FusionOptions fusion_options;
+  FusionRefineOptions refine;
+  if (options.IsDefined() && !options.IsNull()) {
+    const std::vector<std::string>& keys = FusionMethodOptionKeys();
+    scene::StrictYamlReader(source).CheckKeys(options, {keys.begin(), keys.end()}, "fusion options");
+    YAML::Node base = YAML::Clone(options);
+    if (options["refine"]) {
+      refine = FusionRefineOptions::FromYaml(options["refine"], source);
+      base.remove("refine");
+    }
+    fusion_options = fusion::FusionOptions::FromYaml(base, source);
+    fusion_options.Validate();
+  }
+  return [fusion_options, refine](const model::MethodInputs& in) -> std::unique_ptr<model::ViewSynthesizer> {
+    const scene::RgbdDataset& frames = Frames(in);
+    auto synth = std::make_unique<fusion::FusionSynthesizer>(frames, fusion_options);
+    if (refine.Enabled()) {
+      synth->SetRefiner(BuildRefiner(refine, fusion_options.scene, frames, synth->Camera(), in.threads));
+    }
+    return synth;
+  };
+}
+
+}  // namespace p2i::refine
