@@ -72,7 +72,33 @@ scene::RgbdSample FusionSynthesizer::RenderAt(const scene::Pose& pose, const sce
   return ToView(pose, c.blended, c.depth, options_.fill_holes, "fusion");
 }
 
-scene::RgbdSample FusionSynthesizer::Render(const scene::Pose& pose) { return RenderAt(pose, output_camera_); }
+namespace {
+model::ViewGeometry GeometryOf(const ViewCoverage& c) {
+  model::ViewGeometry g;
+  g.observed_fraction = c.observed_fraction;
+  g.keyframe_angle_deg = c.mean_angle_deg;
+  return g;
+}
+}  // namespace
+
+scene::RgbdSample FusionSynthesizer::Render(const scene::Pose& pose) {
+  last_geometry_.clear();
+  scene::RgbdSample v = RenderAt(pose, output_camera_);
+  last_geometry_.push_back(GeometryOf(last_coverage_));
+  return v;
+}
+
+std::vector<scene::RgbdSample> FusionSynthesizer::RenderBatch(const std::vector<scene::Pose>& poses) {
+  std::vector<model::ViewGeometry> geometry;
+  std::vector<scene::RgbdSample> out;
+  out.reserve(poses.size());
+  for (const scene::Pose& p : poses) {
+    out.push_back(RenderAt(p, output_camera_));
+    geometry.push_back(GeometryOf(last_coverage_));
+  }
+  last_geometry_ = std::move(geometry);
+  return out;
+}
 
 Open3dTsdfSynthesizer::Open3dTsdfSynthesizer(const scene::RgbdDataset& training, FusionOptions options,
                                              std::optional<scene::CameraInfo> output_camera)

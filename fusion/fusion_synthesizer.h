@@ -47,6 +47,8 @@ class FusionSynthesizer : public model::ViewSynthesizer {
   std::string Name() const override { return "fusion"; }
   scene::CameraInfo Camera() const override { return output_camera_; }
   scene::RgbdSample Render(const scene::Pose& pose) override;
+  std::vector<scene::RgbdSample> RenderBatch(const std::vector<scene::Pose>& poses) override;
+  std::vector<model::ViewGeometry> LastGeometry() const override { return last_geometry_; }
   int64_t ParameterCount() const override { return refiner_ ? refiner_->ParameterCount() : 0; }
   double FlopsPerView() const override { return refiner_ ? refiner_->FlopsPerView(output_camera_) : 0.0; }
 
@@ -72,6 +74,7 @@ class FusionSynthesizer : public model::ViewSynthesizer {
   scene::CameraInfo output_camera_;
   std::shared_ptr<ViewRefiner> refiner_;
   ViewCoverage last_coverage_;
+  std::vector<model::ViewGeometry> last_geometry_;  ///< of the last Render / RenderBatch
 };
 
 /// `open3d_tsdf`: what a user of Open3D would pick: the same TSDF, rendered by its own raycast of

@@ -13,6 +13,17 @@
 
 namespace p2i::model {
 
+/// What a method with scene geometry (`fusion`) knows of how well one rendered view is observed:
+/// the fused surface behind its pixels and the keyframes that coloured them (issue 12 point 4;
+/// fusion::ViewCoverage in full). Travels with served views as ViewMeta.observed_fraction and
+/// keyframe_angle_deg.
+struct ViewGeometry {
+  double observed_fraction = 0.0;   ///< pixels whose surface the geometry observed / all pixels
+  /// Mean over the keyframe-coloured pixels of the angle (degrees) between the requested ray and
+  /// the nearest keyframe ray that sees the point: 0 on a keyframe's pose, grows off the path.
+  double keyframe_angle_deg = 0.0;
+};
+
 /// P2I-NET, the CNN baseline, nearest keyframe, depth warp... all behind one interface. A
 /// synthesized view is a scene::RgbdSample (the wire form is msgs::View): rgb CV_8UC3 (RGB
 /// order), depth CV_32FC1 metres with 0 = invalid, at the resolution of Camera(); its pose is
@@ -34,6 +45,10 @@ class ViewSynthesizer {
     for (const auto& p : poses) out.push_back(Render(p));
     return out;
   }
+
+  /// The geometry of each view of the last Render or RenderBatch call, in order; empty for
+  /// methods without scene geometry (the default).
+  virtual std::vector<ViewGeometry> LastGeometry() const { return {}; }
 
   /// Parameter count and multiply-accumulate FLOPs per view (2 * MACs), 0 for non-learned.
   virtual int64_t ParameterCount() const { return 0; }

@@ -169,8 +169,22 @@ bool CheckCameraInfo(const pb::CameraInfo& c, const std::string& path, Failure* 
 }
 
 bool CheckUnit(double v, const std::string& field, Failure* f) {
-  if (v < 0.0 || v > 1.0) {
+  if (!(v >= 0.0 && v <= 1.0)) {  // NaN fails too
     return Reject(f, DecodeReason::kBadValue, field + " is " + Num(v) + ", must be in [0, 1]");
+  }
+  return true;
+}
+
+// The optional geometry fields of ViewMeta and View (fusion's observed fraction and keyframe
+// angle): checked when present.
+template <class M>
+bool CheckGeometry(const M& m, const std::string& prefix, Failure* f) {
+  if (m.has_observed_fraction() && !CheckUnit(m.observed_fraction(), prefix + "observed_fraction", f))
+    return false;
+  if (m.has_keyframe_angle_deg() && !(m.keyframe_angle_deg() >= 0.0 && m.keyframe_angle_deg() <= 180.0)) {
+    return Reject(f, DecodeReason::kBadValue, prefix + "keyframe_angle_deg is " +
+                                                  Num(m.keyframe_angle_deg()) +
+                                                  ", must be in [0, 180] degrees");
   }
   return true;
 }
@@ -462,7 +476,7 @@ bool DecodeInto(const WireMessage& wire, RenderReplyMsg* m, Failure* f) {
     const std::string field = "views[" + std::to_string(i) + "]";
     pb::ViewMeta* v = meta.mutable_views(i);
     if (!RequirePose(v, field + ".pose", f) ||
-        !CheckUnit(v->coverage(), field + ".coverage", f)) {
+        !CheckUnit(v->coverage(), field + ".coverage", f) || !CheckGeometry(*v, field + ".", f)) {
       return false;
     }
     if (with_images &&
@@ -506,7 +520,7 @@ bool DecodeInto(const WireMessage& wire, View* m, Failure* f) {
   pb::View& meta = m->meta;
   if (!ParseMeta(wire, pb::VIEW, &meta, f) ||
       !RequirePose(&meta, "pose", f) ||
-      !CheckUnit(meta.coverage(), "coverage", f)) {
+      !CheckUnit(meta.coverage(), "coverage", f) || !CheckGeometry(meta, "", f)) {
     return false;
   }
   BlobRefs refs(wire);

@@ -2,6 +2,7 @@
 /// @brief SynthesizerCore: request validation, batched rendering, background hot swap.
 #include "nodes/synthesizer/synthesizer_core.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <utility>
@@ -238,12 +239,14 @@ std::vector<SynthesizerCore::Rendered> SynthesizerCore::RenderWith(
                                std::to_string(views.size()) + " views for " +
                                std::to_string(chunk.size()) + " poses");
     }
-    for (scene::RgbdSample& v : views) {
-      CheckView(v, name);
+    const std::vector<model::ViewGeometry> geometry = loaded->synth->LastGeometry();
+    for (size_t i = 0; i < views.size(); ++i) {
+      CheckView(views[i], name);
       Rendered r;
-      r.view = std::move(v);
+      r.view = std::move(views[i]);
       r.queue_ms = Ms(start - receipt);
       r.render_ms = Ms(stop - start) / static_cast<double>(chunk.size());
+      if (geometry.size() == views.size()) r.geometry = geometry[i];
       out.push_back(std::move(r));
     }
   }
@@ -259,6 +262,10 @@ void SynthesizerCore::FillMeta(const Loaded& loaded, const msgs::pb::Pose& pose_
   meta->set_queue_ms(r.queue_ms);
   meta->set_render_ms(r.render_ms);
   meta->set_method(options_.method);
+  if (r.geometry) {
+    meta->set_observed_fraction(std::clamp(r.geometry->observed_fraction, 0.0, 1.0));
+    meta->set_keyframe_angle_deg(std::clamp(r.geometry->keyframe_angle_deg, 0.0, 180.0));
+  }
 }
 
 void SynthesizerCore::HandleRender(const msgs::pb::RenderRequest& request,
@@ -339,6 +346,8 @@ bool SynthesizerCore::RenderView(const msgs::pb::Pose& pose, Clock::time_point r
     view->meta.set_queue_ms(meta.queue_ms());
     view->meta.set_render_ms(meta.render_ms());
     view->meta.set_method(meta.method());
+    if (meta.has_observed_fraction()) view->meta.set_observed_fraction(meta.observed_fraction());
+    if (meta.has_keyframe_angle_deg()) view->meta.set_keyframe_angle_deg(meta.keyframe_angle_deg());
     view->rgb = convert::ToImage(rendered[0].view.rgb);
     view->depth = convert::ToImage(rendered[0].view.depth);
   } catch (const std::exception& e) {

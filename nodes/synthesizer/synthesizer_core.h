@@ -124,6 +124,7 @@ class SynthesizerCore {
     scene::RgbdSample view;
     double queue_ms = 0.0;
     double render_ms = 0.0;
+    std::optional<model::ViewGeometry> geometry;  ///< methods with scene geometry (fusion)
   };
 
   std::shared_ptr<Loaded> Current() const;

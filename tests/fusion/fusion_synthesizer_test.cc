@@ -91,6 +91,29 @@ TEST_CASE("fusion: frames added online change what it renders", "[unit]") {
   CHECK(v.rgb.size() == cv::Size(48, 48));
 }
 
+TEST_CASE("fusion: LastGeometry gives each view's observed fraction and keyframe angle, in batch order", "[unit]") {
+  const auto sim = scene::SimScene::BuiltIn("small_office");
+  const scene::RgbdDataset train = Sweep(sim, 48, 8);
+  FusionSynthesizer fusion(train);
+  const scene::Pose on = train.frames[3].pose;
+  // 30 cm off the sweep, towards the room: the same surfaces seen along other rays. (A turn in
+  // place would not do: the angle is between rays through the surface point, which depend on
+  // where the camera is, not where it looks.)
+  const scene::Pose turned = Offset(on, Eigen::Vector3d(0.0, 0.3, 0.0));
+  const scene::Pose away(Eigen::Vector3d(50.0, 50.0, 50.0), on.rotation());  // outside the room
+  const auto views = fusion.RenderBatch({on, turned, away});
+  REQUIRE(views.size() == 3);
+  const std::vector<model::ViewGeometry> g = fusion.LastGeometry();
+  REQUIRE(g.size() == 3);
+  CHECK(g[0].observed_fraction > 0.95);
+  CHECK(g[0].keyframe_angle_deg < 1.0);  // on a keyframe's pose
+  CHECK(g[1].keyframe_angle_deg > g[0].keyframe_angle_deg + 1.0);
+  CHECK(g[2].observed_fraction < 0.05);
+  fusion.Render(on);  // a single Render replaces the batch's geometry
+  REQUIRE(fusion.LastGeometry().size() == 1);
+  CHECK(fusion.LastGeometry()[0].observed_fraction == Approx(g[0].observed_fraction));
+}
+
 TEST_CASE("fusion: an empty scene renders holes, not a crash", "[unit]") {
   scene::RgbdDataset empty;
   empty.camera = scene::SimScene::DefaultCamera(32, 24);

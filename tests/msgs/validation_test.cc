@@ -268,6 +268,30 @@ TEST_CASE("other values: camera info, coverage, counts, deadlines", "[unit]") {
   auto view = s.MakeView();
   view.meta.set_coverage(1.5);
   CheckRejected<View>(Encode(view), DecodeReason::kBadValue, "coverage");
+  view = s.MakeView();
+  view.meta.set_coverage(std::nan(""));
+  CheckRejected<View>(Encode(view), DecodeReason::kNonFinite, "coverage");
+  // The optional geometry fields of fusion's views: checked when present, absent is fine.
+  view = s.MakeView();
+  view.meta.set_observed_fraction(0.8);
+  view.meta.set_keyframe_angle_deg(12.5);
+  {
+    View out;
+    std::string error;
+    REQUIRE(Decode(Encode(view), &out, &error));
+    CHECK(out.meta.observed_fraction() == 0.8);
+    CHECK(out.meta.keyframe_angle_deg() == 12.5);
+  }
+  view.meta.set_observed_fraction(-0.1);
+  CheckRejected<View>(Encode(view), DecodeReason::kBadValue, "observed_fraction");
+  view.meta.set_observed_fraction(0.5);
+  view.meta.set_keyframe_angle_deg(std::nan(""));
+  CheckRejected<View>(Encode(view), DecodeReason::kNonFinite, "keyframe_angle_deg");
+  view.meta.set_keyframe_angle_deg(200.0);
+  CheckRejected<View>(Encode(view), DecodeReason::kBadValue, "keyframe_angle_deg");
+  auto reply = s.MakeRenderReply(2);
+  reply.meta.mutable_views(1)->set_observed_fraction(2.0);
+  CheckRejected<RenderReplyMsg>(Encode(reply), DecodeReason::kBadValue, "views[1].observed_fraction");
   auto req = s.MakePoseRequest();
   req.set_deadline_ns(-1);
   CheckRejected<pb::PoseRequest>(Encode(req), DecodeReason::kBadValue, "deadline_ns");

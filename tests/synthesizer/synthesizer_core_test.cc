@@ -54,6 +54,27 @@ class FakeSynthesizer : public model::ViewSynthesizer {
   bool fail_;
 };
 
+/// A FakeSynthesizer with scene geometry: the view at x was observed on 1 / (1 + x) of its pixels
+/// and seen 10 x degrees off its keyframes.
+class FakeGeometrySynthesizer : public FakeSynthesizer {
+ public:
+  using FakeSynthesizer::FakeSynthesizer;
+  std::vector<scene::RgbdSample> RenderBatch(const std::vector<scene::Pose>& poses) override {
+    geometry_.clear();
+    std::vector<scene::RgbdSample> out;
+    for (const auto& p : poses) {
+      out.push_back(Render(p));
+      const double x = p.translation().x();
+      geometry_.push_back({1.0 / (1.0 + x), 10.0 * x});
+    }
+    return out;
+  }
+  std::vector<model::ViewGeometry> LastGeometry() const override { return geometry_; }
+
+ private:
+  std::vector<model::ViewGeometry> geometry_;
+};
+
 SynthesizerLoader FakeLoader(std::chrono::milliseconds render_time = {},
                              std::chrono::milliseconds load_time = {},
                              std::atomic<bool>* loading = nullptr) {
@@ -158,6 +179,43 @@ TEST_CASE("SynthesizerCore answers a batch with one view per pose, in order, wit
   CHECK(view.meta.coverage() == Approx(1.0));
   CHECK(view.meta.method() == "nearest");
   CHECK(Depth(view.depth) == Approx(1.2));
+}
+
+TEST_CASE("SynthesizerCore passes each view's geometry (observed fraction, keyframe angle) on, per view", "[unit]") {
+  SynthesizerCoreOptions options;
+  options.method = "fusion";
+  options.max_batch = 2;  // 3 poses -> 2 batches: the geometry must follow each batch
+  SynthesizerCore core(options, [](const ModelSpec& spec) -> std::unique_ptr<model::ViewSynthesizer> {
+    return std::make_unique<FakeGeometrySynthesizer>(spec.version, std::chrono::milliseconds(0));
+  }, LineCoverage());
+  core.LoadNow({3, "", "fusion"});
+  msgs::RenderReplyMsg reply;
+  const std::vector<double> xs{0.0, 1.0, 3.0};
+  core.HandleRender(Request(xs), SynthesizerCore::Clock::now(), &reply);
+  REQUIRE(reply.meta.ok());
+  REQUIRE(reply.meta.views_size() == 3);
+  for (int i = 0; i < 3; ++i) {
+    const auto& v = reply.meta.views(i);
+    REQUIRE(v.has_observed_fraction());
+    REQUIRE(v.has_keyframe_angle_deg());
+    CHECK(v.observed_fraction() == Approx(1.0 / (1.0 + xs[i])));
+    CHECK(v.keyframe_angle_deg() == Approx(10.0 * xs[i]));
+  }
+  msgs::View view;
+  std::string error;
+  REQUIRE(core.RenderView(PoseAtX(1.0), SynthesizerCore::Clock::now(), &view, &error));
+  REQUIRE(view.meta.has_observed_fraction());
+  CHECK(view.meta.observed_fraction() == Approx(0.5));
+  CHECK(view.meta.keyframe_angle_deg() == Approx(10.0));
+
+  // A method without geometry leaves the fields absent (not 0, which would read "nothing seen").
+  SynthesizerCore plain(options, FakeLoader(), LineCoverage());
+  plain.LoadNow({1, "", "nearest"});
+  msgs::RenderReplyMsg r2;
+  plain.HandleRender(Request({0.0}), SynthesizerCore::Clock::now(), &r2);
+  REQUIRE(r2.meta.ok());
+  CHECK_FALSE(r2.meta.views(0).has_observed_fraction());
+  CHECK_FALSE(r2.meta.views(0).has_keyframe_angle_deg());
 }
 
 TEST_CASE("SynthesizerCore refuses bad requests with ok=false, counts them and keeps serving",
