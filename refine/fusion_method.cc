@@ -24,12 +24,22 @@ bool IsFile(const std::string& path) {
   return ::stat(path.c_str(), &st) == 0 && S_ISREG(st.st_mode);
 }
 
-/// `path` as the options' author meant it: relative to the folder of `source` when `source` is a
-/// file (a bench config names files relative to itself), else relative to the working directory.
+/// The file the options came from: `source` itself, or its part before " (" (p2i bench names a
+/// method's options "FILE (method 'NAME')"); "" when neither is a file (a node parameter).
+std::string SourceFile(const std::string& source) {
+  if (IsFile(source)) return source;
+  const auto paren = source.find(" (");
+  if (paren != std::string::npos && IsFile(source.substr(0, paren))) return source.substr(0, paren);
+  return "";
+}
+
+/// `path` as the options' author meant it: relative to the folder of the file the options came
+/// from (a bench config names files relative to itself), else to the working directory.
 std::string ResolveNet(const std::string& path, const std::string& source) {
-  if (path.empty() || path.front() == '/' || !IsFile(source)) return path;
-  const auto slash = source.rfind('/');
-  return slash == std::string::npos ? path : source.substr(0, slash + 1) + path;
+  const std::string file = SourceFile(source);
+  if (path.empty() || path.front() == '/' || file.empty()) return path;
+  const auto slash = file.rfind('/');
+  return slash == std::string::npos ? path : file.substr(0, slash + 1) + path;
 }
 
 int Integer(const scene::StrictYamlReader& r, const YAML::Node& map, const std::string& key,
