@@ -20,16 +20,46 @@ int64_t TsdfField::Key(int64_t bx, int64_t by, int64_t bz) {
 }
 
 void TsdfField::AddBlock(int bx, int by, int bz, int64_t buffer_index) {
+  const int64_t b[3] = {bx, by, bz};
+  for (int a = 0; a < 3; ++a) {
+    if (blocks_.empty() || b[a] < lo_[a]) lo_[a] = b[a];
+    if (blocks_.empty() || b[a] > hi_[a]) hi_[a] = b[a];
+  }
   blocks_[Key(bx, by, bz)] = buffer_index;
+  dense_.clear();  // stale until the next Seal()
+}
+
+void TsdfField::Seal() {
+  dense_.clear();
+  if (blocks_.empty()) return;
+  const int64_t nx = hi_[0] - lo_[0] + 1, ny = hi_[1] - lo_[1] + 1, nz = hi_[2] - lo_[2] + 1;
+  if (nx * ny * nz > kMaxDenseCells) return;
+  dense_.assign(static_cast<size_t>(nx * ny * nz), -1);
+  for (int64_t z = 0; z < nz; ++z)
+    for (int64_t y = 0; y < ny; ++y)
+      for (int64_t x = 0; x < nx; ++x) {
+        const auto it = blocks_.find(Key(lo_[0] + x, lo_[1] + y, lo_[2] + z));
+        if (it != blocks_.end()) dense_[static_cast<size_t>((z * ny + y) * nx + x)] = it->second;
+      }
+}
+
+int64_t TsdfField::BlockIndex(int64_t bx, int64_t by, int64_t bz) const {
+  if (!dense_.empty()) {
+    if (bx < lo_[0] || by < lo_[1] || bz < lo_[2] || bx > hi_[0] || by > hi_[1] || bz > hi_[2]) return -1;
+    const int64_t nx = hi_[0] - lo_[0] + 1, ny = hi_[1] - lo_[1] + 1;
+    return dense_[static_cast<size_t>(((bz - lo_[2]) * ny + (by - lo_[1])) * nx + (bx - lo_[0]))];
+  }
+  const auto it = blocks_.find(Key(bx, by, bz));
+  return it == blocks_.end() ? -1 : it->second;
 }
 
 int64_t TsdfField::Find(int64_t vx, int64_t vy, int64_t vz, int64_t* local) const {
   const int64_t bx = FloorDiv(vx, res_), by = FloorDiv(vy, res_), bz = FloorDiv(vz, res_);
-  const auto it = blocks_.find(Key(bx, by, bz));
-  if (it == blocks_.end()) return -1;
+  const int64_t block = BlockIndex(bx, by, bz);
+  if (block < 0) return -1;
   const int64_t lx = vx - bx * res_, ly = vy - by * res_, lz = vz - bz * res_;
   *local = (lz * res_ + ly) * res_ + lx;
-  return it->second;
+  return block;
 }
 
 bool TsdfField::Sample(const Eigen::Vector3f& p, float* value) const {
@@ -39,6 +69,24 @@ bool TsdfField::Sample(const Eigen::Vector3f& p, float* value) const {
   const int64_t x0 = static_cast<int64_t>(fx), y0 = static_cast<int64_t>(fy), z0 = static_cast<int64_t>(fz);
   const int64_t res3 = static_cast<int64_t>(res_) * res_ * res_;
   float sum = 0.0f;
+  // Most cells lie inside one block: one hash lookup for all eight corners (the lookups were most
+  // of the hit refinement's cost).
+  const int64_t bx = FloorDiv(x0, res_), by = FloorDiv(y0, res_), bz = FloorDiv(z0, res_);
+  const int64_t lx = x0 - bx * res_, ly = y0 - by * res_, lz = z0 - bz * res_;
+  if (lx + 1 < res_ && ly + 1 < res_ && lz + 1 < res_) {
+    const int64_t block = BlockIndex(bx, by, bz);
+    if (block < 0) return false;
+    const int64_t base = block * res3 + (lz * res_ + ly) * res_ + lx;
+    for (int k = 0; k < 8; ++k) {
+      const int dx = k & 1, dy = (k >> 1) & 1, dz = (k >> 2) & 1;
+      const int64_t i = base + (static_cast<int64_t>(dz) * res_ + dy) * res_ + dx;
+      if (!(weight_[i] > 0.0f)) return false;
+      const float w = (dx ? rx : 1.0f - rx) * (dy ? ry : 1.0f - ry) * (dz ? rz : 1.0f - rz);
+      sum += w * tsdf_[i];
+    }
+    *value = sum;
+    return true;
+  }
   for (int k = 0; k < 8; ++k) {
     const int dx = k & 1, dy = (k >> 1) & 1, dz = (k >> 2) & 1;
     int64_t local = 0;

@@ -13,6 +13,7 @@
 
 #include <cstdint>
 #include <unordered_map>
+#include <vector>
 
 #include <Eigen/Core>
 
@@ -26,6 +27,11 @@ class TsdfField {
 
   /// Registers the block with integer key (bx, by, bz) stored at `buffer_index`.
   void AddBlock(int bx, int by, int bz, int64_t buffer_index);
+  /// After the last AddBlock: replaces the hash lookups by a dense table over the blocks'
+  /// bounding box when it has at most kMaxDenseCells cells (a room at 2 cm voxels has a few
+  /// thousand); reads are the same either way, only faster. Optional.
+  void Seal();
+  static constexpr int64_t kMaxDenseCells = int64_t{1} << 22;
 
   /// Trilinear TSDF at world point p (voxel values at integer multiples of the voxel size).
   /// False where any of the 8 voxels around p is not allocated or was never observed.
@@ -57,7 +63,13 @@ class TsdfField {
   int res_;
   const float* tsdf_;
   const float* weight_;
+  /// Buffer index of block (bx, by, bz), or -1.
+  int64_t BlockIndex(int64_t bx, int64_t by, int64_t bz) const;
+
   std::unordered_map<int64_t, int64_t> blocks_;
+  // Bounding box of the blocks (block units) and, once sealed, the dense table over it.
+  int64_t lo_[3] = {0, 0, 0}, hi_[3] = {-1, -1, -1};
+  std::vector<int64_t> dense_;
 };
 
 }  // namespace p2i::fusion

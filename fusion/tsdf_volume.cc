@@ -344,6 +344,7 @@ TsdfRaycast TsdfVolume::Raycast(const scene::Pose& pose, const scene::CameraInfo
                                         weight.GetDataPtr<float>());
     const int64_t* ap = active.GetDataPtr<int64_t>();
     for (int64_t i = 0; i < n; ++i) field->AddBlock(kp[3 * i], kp[3 * i + 1], kp[3 * i + 2], ap[i]);
+    field->Seal();
   }
   CopyHits(depth.GetDataPtr<float>(), normal.GetDataPtr<float>(), colour.GetDataPtr<float>(), pose,
            camera, field.get(), &out);

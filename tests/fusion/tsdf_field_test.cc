@@ -25,17 +25,21 @@ struct TwoBlocks {
             tsdf[((b * kRes + z) * kRes + y) * kRes + x] = (z0 - wz) / 0.04f;
           }
   }
-  TsdfField Field() const {
+  /// sealed: the dense block table (TsdfField::Seal), else the hash lookups; reads must agree.
+  TsdfField Field(bool sealed) const {
     TsdfField f(kVoxel, kRes, tsdf.data(), weight.data());
     f.AddBlock(0, 0, 0, 0);
     f.AddBlock(0, 0, 1, 1);
+    if (sealed) f.Seal();
     return f;
   }
 };
 
 TEST_CASE("TsdfField: trilinear reads are exact on a linear field, also across a block edge", "[unit]") {
   const TwoBlocks g;
-  const TsdfField f = g.Field();
+  const bool sealed = GENERATE(false, true);
+  INFO("sealed " << sealed);
+  const TsdfField f = g.Field(sealed);
   float v = 0.0f;
   for (float z : {0.005f, 0.0333f, 0.039f, 0.0412f, 0.055f}) {
     REQUIRE(f.Sample(Eigen::Vector3f(0.012f, 0.017f, z), &v));
@@ -47,12 +51,23 @@ TEST_CASE("TsdfField: trilinear reads are exact on a linear field, also across a
   w[((0 * 4 + 2) * 4 + 1) * 4 + 1] = 0.0f;  // one voxel never observed
   TsdfField holed(0.01f, 4, g.tsdf.data(), w.data());
   holed.AddBlock(0, 0, 0, 0);
+  if (sealed) holed.Seal();
   CHECK_FALSE(holed.Sample(Eigen::Vector3f(0.012f, 0.017f, 0.025f), &v));
+  // A missing block inside the bounding box of the others: (0,0,1) between (0,0,0) and (0,0,2).
+  TsdfField gap(0.01f, 4, g.tsdf.data(), g.weight.data());
+  gap.AddBlock(0, 0, 0, 0);
+  gap.AddBlock(0, 0, 2, 1);
+  if (sealed) gap.Seal();
+  CHECK(gap.Sample(Eigen::Vector3f(0.012f, 0.017f, 0.02f), &v));
+  CHECK_FALSE(gap.Sample(Eigen::Vector3f(0.012f, 0.017f, 0.05f), &v));
+  CHECK(gap.Sample(Eigen::Vector3f(0.012f, 0.017f, 0.09f), &v));
 }
 
 TEST_CASE("TsdfField: a hit up to a few voxels off moves onto the crossing, a hopeless one stays", "[unit]") {
   const TwoBlocks g;
-  const TsdfField f = g.Field();
+  const bool sealed = GENERATE(false, true);
+  INFO("sealed " << sealed);
+  const TsdfField f = g.Field(sealed);
   const Eigen::Vector3f o(0.015f, 0.015f, 0.0f), d(0.0f, 0.0f, 1.0f);
   for (float t0 : {0.047f, 0.044f, 0.05f, 0.025f, 0.058f})
     CHECK(f.RefineHit(o, d, t0) == Approx(g.z0).margin(1e-4));

@@ -1,0 +1,190 @@
+/// @file fusion_bench.cc
+/// @brief Speed and memory of the `fusion` method (issue 12's speed targets): TSDF integration
+/// time per camera frame (against a 30 Hz camera's 33.3 ms), render time per view at 128x128 and
+/// 320x240 with the hit refinement on and off and with the learned refinement, and the fused
+/// scene's memory per m^3 of allocated blocks. The method is built through the method registry,
+/// as `p2i bench` and the synthesizer build it; transport is not included (pipeline_bench has
+/// it). Prints a table and writes JSON.
+///
+/// Usage: OMP_NUM_THREADS=1 fusion_bench [--scene small_office] [--frames 40] [--views 30]
+///                                       [--net models/refine_sim.pt] [--json fusion_bench.json]
+/// OMP_NUM_THREADS=1 makes Open3D's kernels and LibTorch use one thread (both read it at start).
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <iostream>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+#include <yaml-cpp/yaml.h>
+
+#include "fusion/fusion_synthesizer.h"
+#include "fusion/tsdf_volume.h"
+#include "model/method_registry.h"
+#include "scene/image_ops.h"
+#include "scene/sim_scene.h"
+#include "scene/trajectory.h"
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double Ms(Clock::time_point a, Clock::time_point b) {
+  return std::chrono::duration<double, std::milli>(b - a).count();
+}
+
+double Median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
+}
+
+struct Args {
+  std::string scene = "small_office";
+  int frames = 40;  ///< training frames (every 4th pose of the first sweep) at 640x480
+  int views = 30;   ///< test poses on the adjacent sweep
+  std::string net;  ///< refinement file ("" = no refined rows)
+  std::string json = "fusion_bench.json";
+};
+
+bool ParseArgs(int argc, char** argv, Args* a) {
+  for (int i = 1; i < argc; ++i) {
+    const std::string k = argv[i];
+    const bool has = i + 1 < argc;
+    if (k == "--scene" && has) {
+      a->scene = argv[++i];
+    } else if (k == "--frames" && has) {
+      a->frames = std::max(2, std::atoi(argv[++i]));
+    } else if (k == "--views" && has) {
+      a->views = std::max(1, std::atoi(argv[++i]));
+    } else if (k == "--net" && has) {
+      a->net = argv[++i];
+    } else if (k == "--json" && has) {
+      a->json = argv[++i];
+    } else {
+      return false;
+    }
+  }
+  return true;
+}
+
+/// The training frames (640x480, the first of three adjacent sweeps) and the test poses (the
+/// second sweep), as in the bench's setting (b).
+void MakeData(const Args& a, p2i::scene::RgbdDataset* train, std::vector<p2i::scene::Pose>* test) {
+  const auto sim = p2i::scene::SimScene::BuiltIn(a.scene);
+  const auto sweeps = p2i::scene::GenerateAdjacentSweeps(p2i::scene::AdjacentSweepsOptions{});
+  train->camera = p2i::scene::SimScene::DefaultCamera(640, 480);
+  const auto& first = sweeps[0];
+  const size_t step = std::max<size_t>(1, first.size() / static_cast<size_t>(a.frames));
+  for (size_t i = 0; i < first.size() && static_cast<int>(train->frames.size()) < a.frames; i += step)
+    train->frames.push_back(sim.Render(first[i].pose, train->camera, first[i].stamp));
+  const auto& second = sweeps[1];
+  const size_t vstep = std::max<size_t>(1, second.size() / static_cast<size_t>(a.views));
+  for (size_t i = vstep / 2; i < second.size() && static_cast<int>(test->size()) < a.views; i += vstep)
+    test->push_back(second[i].pose);
+}
+
+/// Median integration time of each training frame into a fresh TSDF (default options: 2 cm), and
+/// the volume's memory afterwards.
+nlohmann::json BenchIntegration(const p2i::scene::RgbdDataset& train) {
+  p2i::fusion::TsdfVolume tsdf;
+  std::vector<double> ms;
+  for (const auto& f : train.frames) {
+    const auto t0 = Clock::now();
+    tsdf.Integrate(f, train.camera);
+    ms.push_back(Ms(t0, Clock::now()));
+  }
+  const p2i::fusion::TsdfStats s = tsdf.Stats();
+  nlohmann::json j;
+  j["frame_size"] = std::to_string(train.camera.image_width) + "x" + std::to_string(train.camera.image_height);
+  j["frames"] = train.frames.size();
+  j["integrate_ms_p50"] = Median(ms);
+  j["keeps_up_with_30hz"] = Median(ms) < 1000.0 / 30.0;
+  j["blocks"] = s.blocks;
+  j["memory_mb"] = s.memory_bytes / 1e6;
+  j["block_volume_m3"] = s.block_volume_m3;
+  j["memory_mb_per_m3"] = s.block_volume_m3 > 0 ? s.memory_bytes / 1e6 / s.block_volume_m3 : 0.0;
+  std::printf("integration (%s, %zu frames): p50 %.1f ms/frame (30 Hz budget 33.3 ms: %s)\n",
+              j["frame_size"].get<std::string>().c_str(), train.frames.size(), Median(ms),
+              Median(ms) < 1000.0 / 30.0 ? "keeps up" : "falls behind");
+  std::printf("memory: %lld blocks, %.1f MB over %.2f m^3 of blocks = %.1f MB per m^3\n",
+              static_cast<long long>(s.blocks), s.memory_bytes / 1e6, s.block_volume_m3,
+              j["memory_mb_per_m3"].get<double>());
+  return j;
+}
+
+/// One row: the method built from `options` over `train` (frames at w x h), its median render
+/// time over the test poses.
+nlohmann::json BenchRender(const std::string& label, const std::string& options,
+                           const p2i::scene::RgbdDataset& train, const std::vector<p2i::scene::Pose>& test,
+                           int w, int h) {
+  auto frames = std::make_shared<p2i::scene::RgbdDataset>(p2i::scene::CenterCropResizeDataset(train, w, h));
+  p2i::model::MethodInputs in;
+  in.training = frames;
+  const auto t0 = Clock::now();
+  auto synth = p2i::model::GetMethod("fusion").configure(YAML::Load(options), "fusion_bench")(in);
+  const double build_ms = Ms(t0, Clock::now());
+  synth->Render(test.front());  // warm-up (first allocations, LibTorch's first call)
+  std::vector<double> ms;
+  double observed = 0.0;
+  for (const auto& pose : test) {
+    const auto a = Clock::now();
+    synth->Render(pose);
+    ms.push_back(Ms(a, Clock::now()));
+    const auto g = synth->LastGeometry();
+    if (!g.empty()) observed += g.front().observed_fraction;
+  }
+  const double p50 = Median(ms);
+  std::printf("%-22s %4dx%-4d %9.1f %9.1f %10.0f %9.3f\n", label.c_str(), w, h, p50,
+              p50 > 0 ? 1000.0 / p50 : 0.0, build_ms, observed / test.size());
+  nlohmann::json j;
+  j["row"] = label;
+  j["width"] = w;
+  j["height"] = h;
+  j["options"] = options;
+  j["render_ms_p50"] = p50;
+  j["views_per_s"] = p50 > 0 ? 1000.0 / p50 : 0.0;
+  j["build_ms"] = build_ms;
+  j["observed_fraction_mean"] = observed / test.size();
+  return j;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Args a;
+  if (!ParseArgs(argc, argv, &a)) {
+    std::cerr << "usage: OMP_NUM_THREADS=1 fusion_bench [--scene NAME] [--frames N] [--views N] "
+                 "[--net FILE] [--json FILE]\n";
+    return 2;
+  }
+  try {
+    const char* omp = std::getenv("OMP_NUM_THREADS");
+    std::printf("fusion_bench: scene %s, %d training frames, %d views, OMP_NUM_THREADS=%s\n",
+                a.scene.c_str(), a.frames, a.views, omp ? omp : "(unset: all cores)");
+    p2i::scene::RgbdDataset train;
+    std::vector<p2i::scene::Pose> test;
+    MakeData(a, &train, &test);
+    nlohmann::json out;
+    out["scene"] = a.scene;
+    out["omp_num_threads"] = omp ? omp : "";
+    out["integration"] = BenchIntegration(train);
+    std::printf("%-22s %9s %9s %9s %10s %9s\n", "row", "size", "p50_ms", "views/s", "build_ms", "observed");
+    struct Row { std::string label, options; };
+    std::vector<Row> rows = {{"blend", "{}"}, {"blend_no_refine_hits", "{tsdf: {refine_hits: false}}"}};
+    if (!a.net.empty()) rows.push_back({"refined (zero-shot)", "{refine: {net: '" + a.net + "'}}"});
+    for (const auto& size : {std::make_pair(128, 128), std::make_pair(320, 240)})
+      for (const Row& r : rows)
+        out["render"].push_back(BenchRender(r.label, r.options, train, test, size.first, size.second));
+    std::ofstream(a.json) << out.dump(2) << "\n";
+    std::printf("wrote %s\n", a.json.c_str());
+  } catch (const std::exception& e) {
+    std::cerr << "fusion_bench: " << e.what() << "\n";
+    return 1;
+  }
+  return 0;
+}
