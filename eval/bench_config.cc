@@ -184,10 +184,13 @@ void ReadSizes(const Reader& r, const YAML::Node& root, BenchConfig& c) {
         r.Fail(s, "a size must be a resolution (e.g. 128) or a map {name, resolution, model}");
       }
     } else {
-      r.CheckKeys(s, {"name", "resolution", "model", "settings"}, "a size");
+      r.CheckKeys(s, {"name", "resolution", "height", "model", "settings"}, "a size");
       if (s["settings"]) size.settings = Settings(r, s["settings"], "size settings");
       size.resolution = Int(r, r.Require(s, "resolution", "a size"), "size resolution", 16);
-      size.name = s["name"] ? r.String(s["name"], "size name") : "r" + std::to_string(size.resolution);
+      if (s["height"]) size.height = Int(r, s["height"], "size height", 16);
+      size.name = s["name"] ? r.String(s["name"], "size name")
+                            : "r" + std::to_string(size.resolution) +
+                                  (size.Square() ? "" : "x" + std::to_string(size.Height()));
       size.model_yaml = OverrideMap(r, s["model"], "size '" + size.name + "' model");
     }
     if (!size_names.insert(size.name).second) r.Fail(s, "size name '" + size.name + "' repeats");
@@ -376,7 +379,8 @@ BenchConfig BenchConfig::FromYamlString(const std::string& text, const std::stri
   // Build every learned model config now: a bad override stops the run at start-up.
   for (const auto& m : c.methods)
     if (m.IsLearned())
-      for (const auto& s : c.sizes) (void)c.ModelConfig(m, s, c.SeedsOf(m).front());
+      for (const auto& s : c.sizes)
+        if (s.Square()) (void)c.ModelConfig(m, s, c.SeedsOf(m).front());  // learned: square only
   return c;
 }
 
@@ -424,10 +428,12 @@ std::vector<int> BenchConfig::RunsOf(const MethodSpec& method, const scene::Eval
     return v.empty() || std::find(v.begin(), v.end(), x) != v.end();
   };
   if (!has(size.settings, setting)) return {};
+  if (method.IsLearned() && !size.Square()) return {};  // the networks render square views
   if (!method.IsLearned()) {
     for (const auto& s : sizes) {
       if (&s == &size) break;
-      if (s.resolution == size.resolution && has(s.settings, setting)) return {};
+      if (s.Width() == size.Width() && s.Height() == size.Height() && has(s.settings, setting))
+        return {};
     }
   }
   std::vector<int> seeds_here = SeedsOf(method);

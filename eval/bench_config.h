@@ -65,7 +65,13 @@ struct MethodSpec {
 /// One rung of the size ladder: a resolution and P2iConfig overrides for learned methods.
 struct SizeSpec {
   std::string name;
-  int resolution = 128;
+  int resolution = 128;  ///< view width (and height when `height` is 0)
+  /// View height, 0 = square. A non-square size (e.g. 320 x 240, the camera's 4:3) runs the
+  /// methods that are not learned; learned methods (square networks) skip it.
+  int height = 0;
+  int Width() const { return resolution; }
+  int Height() const { return height > 0 ? height : resolution; }
+  bool Square() const { return Height() == Width(); }
   std::string model_yaml;  ///< P2iConfig overrides (YAML map text), may be empty
   std::vector<scene::EvalSetting> settings;  ///< run only on these settings (empty = every one)
 };

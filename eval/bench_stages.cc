@@ -103,7 +103,7 @@ void RenderSimData(const BenchConfig& c, const std::string& out_dir, Data* data)
   if (!d.specular) data->sim = data->sim->Lambertian();
   data->sim->set_sensor_options(d.sensor);
   int side = d.render_size;
-  for (const auto& s : c.sizes) side = std::max(side, s.resolution);
+  for (const auto& s : c.sizes) side = std::max({side, s.Width(), s.Height()});
   const scene::CameraInfo camera = scene::SimScene::DefaultCamera(side, side);
   scene::AdjacentSweepsOptions sweeps;
   sweeps.sweep.heights = d.heights;
@@ -209,20 +209,21 @@ std::vector<std::string> Subsample(const std::vector<std::string>& ids, size_t m
   return out;
 }
 
-// Frames resized to a resolution, loaded once.
+// Frames centre-cropped and resized to a view size, loaded once.
 class FrameCache {
  public:
   explicit FrameCache(const scene::DatasetIndex& index) : index_(index) {}
-  scene::RgbdDataset Get(const std::vector<std::string>& ids, int res) {
+  scene::RgbdDataset Get(const std::vector<std::string>& ids, const SizeSpec& size) {
+    const int w = size.Width(), h = size.Height();
     scene::RgbdDataset out;
-    out.camera = scene::CenterCropResizeCamera(index_.camera(), res, res);
-    auto& cache = cache_[res];
+    out.camera = scene::CenterCropResizeCamera(index_.camera(), w, h);
+    auto& cache = cache_[{w, h}];
     for (const auto& id : ids) {
       auto it = cache.find(id);
       if (it == cache.end()) {
         const int i = index_.Find(id);
         if (i < 0) throw std::runtime_error("frame " + id + " not in the dataset");
-        it = cache.emplace(id, scene::CenterCropResizeSample(index_.Load(i), res, res)).first;
+        it = cache.emplace(id, scene::CenterCropResizeSample(index_.Load(i), w, h)).first;
       }
       out.frames.push_back(it->second);
     }
@@ -231,7 +232,7 @@ class FrameCache {
 
  private:
   const scene::DatasetIndex& index_;
-  std::map<int, std::map<std::string, scene::RgbdSample>> cache_;
+  std::map<std::pair<int, int>, std::map<std::string, scene::RgbdSample>> cache_;
 };
 
 // ---------------------------------------------------------------- evaluation
@@ -415,13 +416,12 @@ bool AnyRunAt(const BenchConfig& c, const scene::EvalSetting& setting, const Siz
 void PrepareSize(Measurement& ms, const scene::Split& split, const std::vector<std::string>& test_ids,
                  SizeRuns* sr) {
   const BenchConfig& c = ms.run.config;
-  const int res = sr->size->resolution;
-  sr->train = ms.cache.Get(split.train, res);
-  sr->test = ms.cache.Get(test_ids, res);
+  sr->train = ms.cache.Get(split.train, *sr->size);
+  sr->test = ms.cache.Get(test_ids, *sr->size);
   for (const auto& f : sr->train.frames) sr->train_poses.push_back(f.pose);
   sr->coverage = std::make_unique<model::CoverageScorer>(sr->train_poses);
   if (sr->strip_size) {
-    const auto gt = ms.cache.Get(sr->strip_ids, res);
+    const auto gt = ms.cache.Get(sr->strip_ids, *sr->size);
     for (size_t k = 0; k < gt.frames.size(); ++k)
       SaveStripView(sr->strip_dir + "/ground_truth", static_cast<int>(k), gt.frames[k]);
   }
@@ -520,7 +520,7 @@ void EvaluateRow(Measurement& ms, const SizeRuns& sr, const MethodSpec& m,
 void RenderStripViews(Measurement& ms, const SizeRuns& sr, const MethodSpec& m,
                       model::ViewSynthesizer& synth) {
   for (size_t k = 0; k < sr.strip_ids.size(); ++k) {
-    const auto gt = ms.cache.Get({sr.strip_ids[k]}, sr.size->resolution);
+    const auto gt = ms.cache.Get({sr.strip_ids[k]}, *sr.size);
     SaveStripView(sr.strip_dir + "/" + m.name, static_cast<int>(k), synth.Render(gt.frames[0].pose));
   }
 }
@@ -547,7 +547,8 @@ void MeasureRun(Measurement& ms, SizeRuns& sr, const MethodSpec& m, int seed, bo
   row.method_type = m.type;
   row.setting = sr.setting->Name();
   row.size = sr.size->name;
-  row.resolution = sr.size->resolution;
+  row.resolution = sr.size->Width();
+  row.height = sr.size->Height();
   row.seed = seed;
   row.train_frames = static_cast<int>(sr.train.frames.size());
   const bool have_row = run.store.Has(row.Key());

@@ -48,7 +48,7 @@ std::string CsvHeader() {
   return "method,method_type,setting,size,resolution,seed,train_frames,test_views,psnr_db,ssim,"
          "lpips_squeeze,depth_abs_rel,depth_rmse_m,depth_valid_fraction,views_per_s,"
          "latency_p50_ms,latency_p99_ms,threads,train_s,train_steps_phase1,train_steps_phase2,"
-         "params,flops_per_view,coverage_spearman,pose_dependence";
+         "params,flops_per_view,coverage_spearman,pose_dependence,height";
 }
 
 std::string CsvLine(const ResultRow& r) {
@@ -60,7 +60,8 @@ std::string CsvLine(const ResultRow& r) {
      << Num(r.views_per_s) << ',' << Num(r.latency_p50_ms) << ',' << Num(r.latency_p99_ms) << ','
      << r.threads << ',' << Num(r.train_s) << ',' << r.train_steps_phase1 << ','
      << r.train_steps_phase2 << ',' << Num(r.params, 10) << ',' << Num(r.flops_per_view, 10)
-     << ',' << Num(r.coverage_spearman) << ',' << Num(r.pose_dependence);
+     << ',' << Num(r.coverage_spearman) << ',' << Num(r.pose_dependence) << ','
+     << (r.height > 0 ? r.height : r.resolution);
   return os.str();
 }
 
@@ -78,6 +79,7 @@ std::string ResultsToJson(const std::vector<ResultRow>& rows, const std::string&
     j["setting"] = r.setting;
     j["size"] = r.size;
     j["resolution"] = r.resolution;
+    j["height"] = r.height > 0 ? r.height : r.resolution;
     j["seed"] = r.seed;
     j["train_frames"] = r.train_frames;
     j["test_views"] = r.test_views;
@@ -128,6 +130,7 @@ std::vector<ResultRow> ParseResultsJson(const std::string& text, std::string* co
       r.setting = j.at("setting");
       r.size = j.at("size");
       r.resolution = j.at("resolution");
+      r.height = j.value("height", r.resolution);  // files before 4:3 sizes: square
       r.seed = j.at("seed");
       r.train_frames = j.value("train_frames", 0);
       r.test_views = j.value("test_views", 0);

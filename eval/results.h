@@ -25,7 +25,8 @@ struct ResultRow {
   std::string method_type;  ///< nearest | warp | p2i | cnn
   std::string setting;      ///< a1 a3 a10 a20 b c
   std::string size;         ///< the config's size name
-  int resolution = 0;
+  int resolution = 0;       ///< view width
+  int height = 0;           ///< view height (= resolution for square sizes; 0 read from old files)
   int seed = 0;
   int train_frames = 0;
   int test_views = 0;

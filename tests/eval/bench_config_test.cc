@@ -169,3 +169,22 @@ sizes: [64]
   CHECK(bad.find("my_bench.yaml:2") != std::string::npos);
   CHECK(bad.find("auto_exposure must be at most 1 (got 3)") != std::string::npos);
 }
+
+TEST_CASE("Bench config: a 4:3 size runs the methods that are not learned, learned ones skip it", "[unit]") {
+  const std::string text = kBase + "  - {resolution: 40, height: 30}\n  - {name: c43, resolution: 32, height: 24}\n";
+  const BenchConfig c = BenchConfig::FromYamlString(text, "my_bench.yaml");
+  REQUIRE(c.sizes.size() == 4);
+  CHECK(c.sizes[0].Square());
+  CHECK(c.sizes[0].Height() == 32);
+  CHECK(c.sizes[2].name == "r40x30");  // default name says both sides
+  CHECK(c.sizes[2].Width() == 40);
+  CHECK(c.sizes[2].Height() == 30);
+  CHECK_FALSE(c.sizes[2].Square());
+  const auto b = p2i::scene::EvalSetting::Parse("b");
+  CHECK(c.RunsOf(c.methods[0], b, c.sizes[2]) == std::vector<int>{1});  // nearest at 40 x 30
+  CHECK(c.RunsOf(c.methods[1], b, c.sizes[2]).empty());                 // p2i: square only
+  // 32 x 24 is not 32 x 32: the baseline runs again at the new shape.
+  CHECK(c.RunsOf(c.methods[0], b, c.sizes[3]) == std::vector<int>{1});
+  CHECK(ErrorOf(kBase + "  - {resolution: 40, height: 8}\n").find("size height must be >= 16") !=
+        std::string::npos);
+}

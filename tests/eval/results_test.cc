@@ -58,9 +58,16 @@ TEST_CASE("ResultsStore writes one CSV/JSON row per completed combination, NA fo
   CHECK(header.find("lpips_squeeze") != std::string::npos);
   CHECK(header.find("latency_p99_ms") != std::string::npos);
   CHECK(header.find("flops_per_view") != std::string::npos);
-  CHECK(header.substr(header.rfind(',') + 1) == "pose_dependence");
-  CHECK(l1.substr(l1.rfind(',') + 1) == "NA");  // nearest: not computed
-  CHECK(l2.substr(l2.rfind(',') + 1) == "0.875");
+  // The last two columns: pose_dependence, then height (appended with 4:3 sizes; square here).
+  const auto second_last = [](const std::string& line) {
+    const std::string head = line.substr(0, line.rfind(','));
+    return head.substr(head.rfind(',') + 1);
+  };
+  CHECK(header.substr(header.rfind(',') + 1) == "height");
+  CHECK(second_last(header) == "pose_dependence");
+  CHECK(second_last(l1) == "NA");  // nearest: not computed
+  CHECK(second_last(l2) == "0.875");
+  CHECK(l1.substr(l1.rfind(',') + 1) == "128");
   CHECK(l1.rfind("nearest,nearest,a3,r128,128,1,", 0) == 0);
   CHECK(l1.find(",NA,") != std::string::npos);
   CHECK(l2.find(",0.2,") != std::string::npos);

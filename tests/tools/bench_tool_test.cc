@@ -29,18 +29,28 @@ TEST_CASE("p2i bench runs the tiny config end to end and resumes", "[integration
   INFO(out);
   REQUIRE(code == 0);
 
-  // 3 methods x 4 settings x 1 size x 1 seed.
+  // 3 methods x 4 settings at r32, + nearest and warp on b at r40x30 (4:3; p2i skips it).
   std::ifstream csv(dir / "out" / "results.csv");
   std::string line;
   int rows = 0;
   std::getline(csv, line);
   CHECK(line.rfind("method,method_type,setting,size", 0) == 0);
   while (std::getline(csv, line)) ++rows;
-  CHECK(rows == 12);
+  CHECK(rows == 14);
   std::ifstream js(dir / "out" / "results.json");
   const auto j = nlohmann::json::parse(js);
-  REQUIRE(j.at("rows").size() == 12);
+  REQUIRE(j.at("rows").size() == 14);
+  int four_three = 0;
   for (const auto& r : j.at("rows")) {
+    if (r.at("size") == "r40x30") {
+      ++four_three;
+      CHECK(r.at("resolution").get<int>() == 40);
+      CHECK(r.at("height").get<int>() == 30);
+      CHECK(r.at("setting") == "b");
+      CHECK(r.at("method") != "p2i");
+    } else {
+      CHECK(r.at("height").get<int>() == 32);
+    }
     CHECK(r.at("psnr_db").get<double>() > 5.0);
     CHECK(r.at("views_per_s").get<double>() > 0.0);
     CHECK(r.at("test_views").get<int>() > 0);
@@ -53,6 +63,7 @@ TEST_CASE("p2i bench runs the tiny config end to end and resumes", "[integration
     else
       CHECK(r.at("lpips_squeeze").is_null());  // missing, never 0
   }
+  CHECK(four_three == 2);
   // Charts (PNG + SVG with gnuplot, else scripts), report, strips, stability, splits.
   const bool gnuplot = std::system("command -v gnuplot >/dev/null 2>&1") == 0;
   for (const char* stem : {"accuracy_vs_speed_psnr", "quality_per_setting_psnr", "stability_translation",
@@ -78,7 +89,7 @@ TEST_CASE("p2i bench runs the tiny config end to end and resumes", "[integration
   const std::string again = p2i::testing::RunCommand(cmd, &code);
   INFO(again);
   CHECK(code == 0);
-  CHECK(again.find("resuming: 12 row(s)") != std::string::npos);
+  CHECK(again.find("resuming: 14 row(s)") != std::string::npos);
   CHECK(again.find("training") == std::string::npos);
 
   // Bad config: refused at start-up naming the key and the file.
