@@ -16,30 +16,11 @@
 
 namespace fs = std::filesystem;
 
-TEST_CASE("p2i bench runs the tiny config end to end and resumes", "[integration]") {
-  const fs::path dir = fs::temp_directory_path() / ("p2i_bench_tool_" + std::to_string(getpid()));
-  fs::remove_all(dir);
-  const std::string p2i = p2i::testing::BinDir() + "/p2i";
-  const std::string config = p2i::testing::SourceDir() + "/bench/configs/tiny.yaml";
-  const std::string cmd = p2i + " bench " + config + " --out " + (dir / "out").string() +
-                          " --lpips-weights " + p2i::testing::SharedDir() +
-                          "/models/lpips/lpips_squeeze_v0.1.pth 2>&1";
-  int code = -1;
-  const std::string out = p2i::testing::RunCommand(cmd, &code);
-  INFO(out);
-  REQUIRE(code == 0);
+namespace {
 
-  // 3 methods x 4 settings at r32, + nearest and warp on b at r40x30 (4:3; p2i skips it).
-  std::ifstream csv(dir / "out" / "results.csv");
-  std::string line;
-  int rows = 0;
-  std::getline(csv, line);
-  CHECK(line.rfind("method,method_type,setting,size", 0) == 0);
-  while (std::getline(csv, line)) ++rows;
-  CHECK(rows == 14);
-  std::ifstream js(dir / "out" / "results.json");
-  const auto j = nlohmann::json::parse(js);
-  REQUIRE(j.at("rows").size() == 14);
+// Every row of tiny.yaml's results.json: plausible figures, LPIPS null only without weights, and
+// the 4:3 size's two rows (nearest and warp on b at 40 x 30, no p2i).
+void CheckRows(const nlohmann::json& j) {
   int four_three = 0;
   for (const auto& r : j.at("rows")) {
     if (r.at("size") == "r40x30") {
@@ -64,6 +45,35 @@ TEST_CASE("p2i bench runs the tiny config end to end and resumes", "[integration
       CHECK(r.at("lpips_squeeze").is_null());  // missing, never 0
   }
   CHECK(four_three == 2);
+}
+
+}  // namespace
+
+TEST_CASE("p2i bench runs the tiny config end to end and resumes", "[integration]") {
+  const fs::path dir = fs::temp_directory_path() / ("p2i_bench_tool_" + std::to_string(getpid()));
+  fs::remove_all(dir);
+  const std::string p2i = p2i::testing::BinDir() + "/p2i";
+  const std::string config = p2i::testing::SourceDir() + "/bench/configs/tiny.yaml";
+  const std::string cmd = p2i + " bench " + config + " --out " + (dir / "out").string() +
+                          " --lpips-weights " + p2i::testing::SharedDir() +
+                          "/models/lpips/lpips_squeeze_v0.1.pth 2>&1";
+  int code = -1;
+  const std::string out = p2i::testing::RunCommand(cmd, &code);
+  INFO(out);
+  REQUIRE(code == 0);
+
+  // 3 methods x 4 settings at r32, + nearest and warp on b at r40x30 (4:3; p2i skips it).
+  std::ifstream csv(dir / "out" / "results.csv");
+  std::string line;
+  int rows = 0;
+  std::getline(csv, line);
+  CHECK(line.rfind("method,method_type,setting,size", 0) == 0);
+  while (std::getline(csv, line)) ++rows;
+  CHECK(rows == 14);
+  std::ifstream js(dir / "out" / "results.json");
+  const auto j = nlohmann::json::parse(js);
+  REQUIRE(j.at("rows").size() == 14);
+  CheckRows(j);
   // Charts (PNG + SVG with gnuplot, else scripts), report, strips, stability, splits.
   const bool gnuplot = std::system("command -v gnuplot >/dev/null 2>&1") == 0;
   for (const char* stem : {"accuracy_vs_speed_psnr", "quality_per_setting_psnr", "stability_translation",
