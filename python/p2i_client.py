@@ -244,6 +244,17 @@ class Client:
             sock.close()
 
 
+def GeometryText(meta):
+    """", observed 0.950, keyframe angle 2.1 deg" for a view of a method with scene geometry
+    (fusion: ViewMeta.observed_fraction / keyframe_angle_deg), "" for the others."""
+    if not meta.HasField("observed_fraction"):
+        return ""
+    text = ", observed %.3f" % meta.observed_fraction
+    if meta.HasField("keyframe_angle_deg"):
+        text += ", keyframe angle %.1f deg" % meta.keyframe_angle_deg
+    return text
+
+
 def _main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     sub = ap.add_subparsers(dest="cmd", required=True)
@@ -267,8 +278,9 @@ def _main():
             for i, (meta, rgb, depth) in enumerate(c.render(a.pose, a.service, a.method, a.timeout)):
                 files = [rgb.save(os.path.join(a.out, "view_%03d_rgb" % i)),
                          depth.save(os.path.join(a.out, "view_%03d_depth" % i))] if rgb else []
-                print("view %d: method %s, model version %d, coverage %.3f, %s" %
-                      (i, meta.method, meta.model_version, meta.coverage, " ".join(files)))
+                print("view %d: method %s, model version %d, coverage %.3f%s, %s" %
+                      (i, meta.method, meta.model_version, meta.coverage, GeometryText(meta),
+                       " ".join(files)))
         else:
             if a.out:
                 os.makedirs(a.out, exist_ok=True)

@@ -66,6 +66,13 @@ try:
     check(len(views) == 2, "2 views")
     for i, (meta, rgb, depth) in enumerate(views):
         check(meta.method == "nearest", "method " + meta.method)
+        # The geometry fields are proto3 optionals: absent (not 0) for a method without geometry.
+        check(not meta.HasField("observed_fraction"), "nearest sets no observed_fraction")
+        check(p2i_client.GeometryText(meta) == "", "no geometry text for nearest")
+        meta.observed_fraction = 0.5
+        meta.keyframe_angle_deg = 3.0
+        check(p2i_client.GeometryText(meta) == ", observed 0.500, keyframe angle 3.0 deg",
+              "geometry text: " + p2i_client.GeometryText(meta))
         check(rgb is not None and rgb.width == 32 and rgb.height == 32, "rgb image 32x32")
         path = rgb.save(os.path.join(work, "view%d_rgb" % i))
         check(os.path.getsize(path) == len(b"P6\n32 32\n255\n") + 32 * 32 * 3, "PPM size")
