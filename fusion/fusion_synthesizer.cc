@@ -82,10 +82,7 @@ model::ViewGeometry GeometryOf(const ViewCoverage& c) {
 }  // namespace
 
 scene::RgbdSample FusionSynthesizer::Render(const scene::Pose& pose) {
-  last_geometry_.clear();
-  scene::RgbdSample v = RenderAt(pose, output_camera_);
-  last_geometry_.push_back(GeometryOf(last_coverage_));
-  return v;
+  return std::move(RenderBatch({pose}).front());
 }
 
 std::vector<scene::RgbdSample> FusionSynthesizer::RenderBatch(const std::vector<scene::Pose>& poses) {

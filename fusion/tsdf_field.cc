@@ -68,31 +68,27 @@ bool TsdfField::Sample(const Eigen::Vector3f& p, float* value) const {
   const float rx = q.x() - fx, ry = q.y() - fy, rz = q.z() - fz;
   const int64_t x0 = static_cast<int64_t>(fx), y0 = static_cast<int64_t>(fy), z0 = static_cast<int64_t>(fz);
   const int64_t res3 = static_cast<int64_t>(res_) * res_ * res_;
-  float sum = 0.0f;
-  // Most cells lie inside one block: one hash lookup for all eight corners (the lookups were most
-  // of the hit refinement's cost).
+  // Most cells lie inside one block: one block lookup serves all eight corners (the lookups were
+  // most of the hit refinement's cost); a cell across a block edge looks each corner up.
   const int64_t bx = FloorDiv(x0, res_), by = FloorDiv(y0, res_), bz = FloorDiv(z0, res_);
   const int64_t lx = x0 - bx * res_, ly = y0 - by * res_, lz = z0 - bz * res_;
-  if (lx + 1 < res_ && ly + 1 < res_ && lz + 1 < res_) {
+  const bool one_block = lx + 1 < res_ && ly + 1 < res_ && lz + 1 < res_;
+  int64_t base = 0;
+  if (one_block) {
     const int64_t block = BlockIndex(bx, by, bz);
     if (block < 0) return false;
-    const int64_t base = block * res3 + (lz * res_ + ly) * res_ + lx;
-    for (int k = 0; k < 8; ++k) {
-      const int dx = k & 1, dy = (k >> 1) & 1, dz = (k >> 2) & 1;
-      const int64_t i = base + (static_cast<int64_t>(dz) * res_ + dy) * res_ + dx;
-      if (!(weight_[i] > 0.0f)) return false;
-      const float w = (dx ? rx : 1.0f - rx) * (dy ? ry : 1.0f - ry) * (dz ? rz : 1.0f - rz);
-      sum += w * tsdf_[i];
-    }
-    *value = sum;
-    return true;
+    base = block * res3 + (lz * res_ + ly) * res_ + lx;
   }
+  float sum = 0.0f;
   for (int k = 0; k < 8; ++k) {
     const int dx = k & 1, dy = (k >> 1) & 1, dz = (k >> 2) & 1;
-    int64_t local = 0;
-    const int64_t block = Find(x0 + dx, y0 + dy, z0 + dz, &local);
-    if (block < 0) return false;
-    const int64_t i = block * res3 + local;
+    int64_t i = base + (static_cast<int64_t>(dz) * res_ + dy) * res_ + dx;
+    if (!one_block) {
+      int64_t local = 0;
+      const int64_t block = Find(x0 + dx, y0 + dy, z0 + dz, &local);
+      if (block < 0) return false;
+      i = block * res3 + local;
+    }
     if (!(weight_[i] > 0.0f)) return false;
     const float w = (dx ? rx : 1.0f - rx) * (dy ? ry : 1.0f - ry) * (dz ? rz : 1.0f - rz);
     sum += w * tsdf_[i];
