@@ -264,7 +264,13 @@ void ReadMethods(const Reader& r, const YAML::Node& root, const std::string& con
       e << options;
       spec.options_yaml = e.c_str();
     }
-    spec.make = info->configure(options, c.source + " (method '" + spec.name + "')");
+    // The options' source is the config file itself (a method resolves the files its options name
+    // relative to it); the method is named when an option is refused.
+    try {
+      spec.make = info->configure(options, c.source);
+    } catch (const std::exception& e) {
+      throw std::runtime_error(std::string(e.what()) + " (method '" + spec.name + "')");
+    }
     if (spec.IsLearned()) {
       if (spec.preset.empty()) spec.preset = info->default_preset;
       try {

@@ -19,14 +19,6 @@ FusionOptions ReadOptions(const YAML::Node& options, const std::string& source) 
   return o;
 }
 
-const scene::RgbdDataset& Frames(const model::MethodInputs& in, const char* method) {
-  if (!in.training || in.training->frames.empty() || in.training->frames.front().rgb.empty()) {
-    throw std::invalid_argument(std::string("method '") + method +
-                                "' needs training frames (rgb and depth): give it a dataset");
-  }
-  return *in.training;
-}
-
 }  // namespace
 
 const std::vector<std::string>& FusionOptionKeys() {
@@ -37,7 +29,7 @@ const std::vector<std::string>& FusionOptionKeys() {
 model::MethodFactory ConfigureOpen3dTsdf(const YAML::Node& options, const std::string& source) {
   const FusionOptions o = ReadOptions(options, source);
   return [o](const model::MethodInputs& in) -> std::unique_ptr<model::ViewSynthesizer> {
-    return std::make_unique<Open3dTsdfSynthesizer>(Frames(in, "open3d_tsdf"), o);
+    return std::make_unique<Open3dTsdfSynthesizer>(model::RequireTrainingFrames(in, "open3d_tsdf"), o);
   };
 }
 

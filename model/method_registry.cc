@@ -19,13 +19,6 @@ namespace {
 /// An options map that is null or empty means "defaults".
 bool NoOptions(const YAML::Node& node) { return !node.IsDefined() || node.IsNull(); }
 
-void RequireFrames(const MethodInputs& in, const std::string& method) {
-  if (!in.training || in.training->frames.empty() || in.training->frames.front().rgb.empty()) {
-    throw std::invalid_argument("method '" + method +
-                                "' needs training frames (rgb and depth): give it a dataset");
-  }
-}
-
 /// p2i and cnn: a checkpoint of model::Trainer; LoadSynthesizer reads which network it holds.
 MethodFactory ConfigureLearned(const YAML::Node& options, const std::string& source) {
   if (!NoOptions(options) && options.size() > 0) {
@@ -47,8 +40,7 @@ MethodFactory ConfigureNearest(const YAML::Node& options, const std::string& sou
                                        ? NearestKeyframeOptions{}
                                        : NearestKeyframeOptions::FromYaml(options, source);
   return [o](const MethodInputs& in) -> std::unique_ptr<ViewSynthesizer> {
-    RequireFrames(in, "nearest");
-    return std::make_unique<NearestKeyframe>(*in.training, o);
+    return std::make_unique<NearestKeyframe>(RequireTrainingFrames(in, "nearest"), o);
   };
 }
 
@@ -59,8 +51,7 @@ MethodFactory ConfigureWarp(const YAML::Node& options, const std::string& source
   if (!NoOptions(options)) o = DepthWarpOptions::FromYaml(options, source);
   if (NoOptions(options) || !options["fill_holes"]) o.fill_holes = true;
   return [o](const MethodInputs& in) -> std::unique_ptr<ViewSynthesizer> {
-    RequireFrames(in, "warp");
-    return std::make_unique<DepthWarp>(*in.training, o);
+    return std::make_unique<DepthWarp>(RequireTrainingFrames(in, "warp"), o);
   };
 }
 

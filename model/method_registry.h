@@ -12,6 +12,7 @@
 
 #include <functional>
 #include <memory>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -60,6 +61,17 @@ struct MethodInfo {
   /// naming `source`, the line and the key.
   std::function<MethodFactory(const YAML::Node& options, const std::string& source)> configure;
 };
+
+/// The training frames of `in`, or std::invalid_argument "method 'NAME' needs training frames
+/// ..." when there are none (or they have no images). Inline: the method libraries below
+/// p2i_methods (p2i_fusion, p2i_refine) call it too.
+inline const scene::RgbdDataset& RequireTrainingFrames(const MethodInputs& in, const std::string& method) {
+  if (!in.training || in.training->frames.empty() || in.training->frames.front().rgb.empty()) {
+    throw std::invalid_argument("method '" + method +
+                                "' needs training frames (rgb and depth): give it a dataset");
+  }
+  return *in.training;
+}
 
 /// Every method, in table order (the order of help texts and error messages).
 const std::vector<MethodInfo>& Methods();

@@ -24,22 +24,13 @@ bool IsFile(const std::string& path) {
   return ::stat(path.c_str(), &st) == 0 && S_ISREG(st.st_mode);
 }
 
-/// The file the options came from: `source` itself, or its part before " (" (p2i bench names a
-/// method's options "FILE (method 'NAME')"); "" when neither is a file (a node parameter).
-std::string SourceFile(const std::string& source) {
-  if (IsFile(source)) return source;
-  const auto paren = source.find(" (");
-  if (paren != std::string::npos && IsFile(source.substr(0, paren))) return source.substr(0, paren);
-  return "";
-}
-
-/// `path` as the options' author meant it: relative to the folder of the file the options came
-/// from (a bench config names files relative to itself), else to the working directory.
+/// `path` as the options' author meant it: relative to the folder of `source` when `source` is a
+/// file (p2i bench passes its config file), else relative to the working directory (a node
+/// parameter).
 std::string ResolveNet(const std::string& path, const std::string& source) {
-  const std::string file = SourceFile(source);
-  if (path.empty() || path.front() == '/' || file.empty()) return path;
-  const auto slash = file.rfind('/');
-  return slash == std::string::npos ? path : file.substr(0, slash + 1) + path;
+  if (path.empty() || path.front() == '/' || !IsFile(source)) return path;
+  const auto slash = source.rfind('/');
+  return slash == std::string::npos ? path : source.substr(0, slash + 1) + path;
 }
 
 int Integer(const scene::StrictYamlReader& r, const YAML::Node& map, const std::string& key,
@@ -49,13 +40,6 @@ int Integer(const scene::StrictYamlReader& r, const YAML::Node& map, const std::
   const double v = r.Double(n, "refine." + key);
   if (v != std::floor(v) || std::fabs(v) > 1e9) r.Fail(n, "refine." + key + " must be an integer");
   return static_cast<int>(v);
-}
-
-const scene::RgbdDataset& Frames(const model::MethodInputs& in) {
-  if (!in.training || in.training->frames.empty() || in.training->frames.front().rgb.empty()) {
-    throw std::invalid_argument("method 'fusion' needs training frames (rgb and depth): give it a dataset");
-  }
-  return *in.training;
 }
 
 /// The refiner of one built method: the named net (or a fresh one), fine-tuned by leave-one-out
@@ -160,7 +144,7 @@ model::MethodFactory ConfigureFusionMethod(const YAML::Node& options, const std:
     fusion_options.Validate();
   }
   return [fusion_options, refine](const model::MethodInputs& in) -> std::unique_ptr<model::ViewSynthesizer> {
-    const scene::RgbdDataset& frames = Frames(in);
+    const scene::RgbdDataset& frames = model::RequireTrainingFrames(in, "fusion");
     auto synth = std::make_unique<fusion::FusionSynthesizer>(frames, fusion_options);
     if (refine.Enabled()) {
       synth->SetRefiner(BuildRefiner(refine, fusion_options.scene, frames, synth->Camera(), in.threads));

@@ -97,6 +97,9 @@ sizes: [128]  # the default preset (g_widths) is for 128
   CHECK(ErrorOf("dataset: {scene: x}\nsettings: [a1]\nmethods: [{name: warp, k: 0}]\n"
                 "sizes: [64]\n")
             .find("my_bench.yaml") != std::string::npos);
+  CHECK(ErrorOf("dataset: {scene: x}\nsettings: [a1]\nmethods: [{name: warp, k: 0}]\n"
+                "sizes: [64]\n")
+            .find("(method 'warp')") != std::string::npos);
   const std::string e =
       ErrorOf("dataset: {scene: x}\nsettings: [a1]\nmethods: [nerf]\nsizes: [64]\n");
   CHECK(e.find("p2i, cnn, nearest, warp") != std::string::npos);  // the registry's list

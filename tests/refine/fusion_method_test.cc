@@ -94,10 +94,6 @@ TEST_CASE("fusion refine.net is relative to the config file it is written in", "
       refine::FusionRefineOptions::FromYaml(YAML::Load("{net: ../models/net.pt}"), config);
   CHECK(o.net == dir.path + "/configs/../models/net.pt");
   CHECK(o.Enabled());
-  // p2i bench names a method's options "FILE (method 'NAME')".
-  CHECK(refine::FusionRefineOptions::FromYaml(YAML::Load("{net: ../models/net.pt}"),
-                                              config + " (method 'fusion_tuned')")
-            .net == dir.path + "/configs/../models/net.pt");
   // From a source that is not a file (a node parameter), the path is taken as given.
   CHECK_THROWS_WITH(refine::FusionRefineOptions::FromYaml(YAML::Load("{net: ../models/net.pt}"),
                                                           "synthesizer parameter method_options"),
