@@ -142,187 +142,183 @@ std::set<int> FramesOf(const scene::RgbdDataset& sim, const std::string& poses_p
   return frames;
 }
 
+/// The set-up every two-rank scenario below shares: a fresh shutdown flag and run directory, a
+/// work folder `dir` with the tiny config, 16 sim frames and the harness that publishes them, and
+/// ranks 0 and 1 started on this test case's master port (Port(port_index)) with `extra`.
+struct TwoRanks {
+  TwoRanks(const std::string& name, int port_index, const std::string& extra)
+      : reset_((runtime::Shutdown::ResetForTesting(), 0)),
+        dir(trainer::testing::TempDir(name)),
+        config(trainer::testing::TinyConfig()),
+        sim(trainer::testing::SimFrames(16)),
+        h(sim) {
+    std::ofstream(dir + "/tiny.yaml") << config.ToYamlString();
+    const std::string port = Port(port_index);
+    r0 = StartRank(dir, 0, port, extra);
+    r1 = StartRank(dir, 1, port, extra);
+  }
+  /// Both ranks' logs (stderr), for INFO.
+  std::string Logs() const {
+    return "rank 0:\n" + p2i::testing::ReadFile(dir + "/rank0.log") + "\nrank 1:\n" +
+           p2i::testing::ReadFile(dir + "/rank1.log");
+  }
+
+ private:
+  int reset_;  // Shutdown::ResetForTesting, before anything else is built
+
+ public:
+  runtime::testing::ScopedRunDir run_dir;
+  const std::string dir;
+  const model::P2iConfig config;
+  const scene::RgbdDataset sim;
+  Harness h;
+  std::unique_ptr<p2i::testing::Process> r0, r1;
+};
+
 }  // namespace
 
 TEST_CASE("p2i_trainer world_size 2: rank 0 publishes the versions both ranks trained, each on "
           "its own shard, every step all-reduced",
           "[integration]") {
-  runtime::Shutdown::ResetForTesting();
-  runtime::testing::ScopedRunDir run_dir;
-  const std::string dir = trainer::testing::TempDir("dp");
-  const model::P2iConfig config = trainer::testing::TinyConfig();
-  std::ofstream(dir + "/tiny.yaml") << config.ToYamlString();
-  const scene::RgbdDataset sim = trainer::testing::SimFrames(16);
-  Harness h(sim);
-  const std::string port = Port(0);
-  auto r0 = StartRank(dir, 0, port, "max_rounds:=2");
-  auto r1 = StartRank(dir, 1, port, "max_rounds:=2");
-  const bool done = h.RunUntil(
+  TwoRanks t("dp", 0, "max_rounds:=2");
+  const bool done = t.h.RunUntil(
       [&] {
-        return h.Status(0).phase() == "done" && h.Status(1).phase() == "done" &&
-               h.HighestVersion(0) == 2;
+        return t.h.Status(0).phase() == "done" && t.h.Status(1).phase() == "done" &&
+               t.h.HighestVersion(0) == 2;
       },
       std::chrono::seconds(120));
-  INFO("rank 0:\n" << p2i::testing::ReadFile(dir + "/rank0.log") << "\nrank 1:\n"
-                   << p2i::testing::ReadFile(dir + "/rank1.log"));
+  INFO(t.Logs());
   REQUIRE(done);
   for (int rank : {0, 1}) {
-    const auto s = h.Status(rank);
+    const auto s = t.h.Status(rank);
     CHECK(s.world_size() == 2);
     CHECK(s.rank() == static_cast<uint32_t>(rank));
     CHECK(s.error().empty());
     CHECK(s.step() == 6);  // two rounds of 3 steps on every rank
   }
   // Only rank 0 publishes and writes versions.
-  CHECK(h.Versions(1).empty());
-  CHECK((!fs::exists(dir + "/r1/versions") || fs::is_empty(dir + "/r1/versions")));
-  const auto& v = h.Versions(0).back();
+  CHECK(t.h.Versions(1).empty());
+  CHECK((!fs::exists(t.dir + "/r1/versions") || fs::is_empty(t.dir + "/r1/versions")));
+  const auto& v = t.h.Versions(0).back();
   CHECK(v.step() == 6);
   REQUIRE(fs::exists(v.checkpoint_path()));
 
   // Every phase-1 step all-reduced D's and G's gradients on both ranks (d_steps + 1 per step).
-  const auto stats0 = nlohmann::json::parse(p2i::testing::ReadFile(dir + "/r0/distributed.rank0.json"));
-  const auto stats1 = nlohmann::json::parse(p2i::testing::ReadFile(dir + "/r1/distributed.rank1.json"));
-  const int per_step = config.d_steps + 1;
+  const auto stats0 = nlohmann::json::parse(p2i::testing::ReadFile(t.dir + "/r0/distributed.rank0.json"));
+  const auto stats1 = nlohmann::json::parse(p2i::testing::ReadFile(t.dir + "/r1/distributed.rank1.json"));
+  const int per_step = t.config.d_steps + 1;
   CHECK(stats0["allreduce_calls"].get<int>() == 6 * per_step);
   CHECK(stats1["allreduce_calls"].get<int>() == 6 * per_step);
   CHECK(stats0["allreduce_sizes_bytes"] == stats1["allreduce_sizes_bytes"]);
   CHECK(stats0["allreduce_sizes_bytes"].size() == 2);  // D's and G's gradients
 
   // The second round started on rank 1 from rank 0's checkpoint of version 1 (the same bytes).
-  const std::string v1 = dir + "/r0/versions/model_v000001.pt";
+  const std::string v1 = t.dir + "/r0/versions/model_v000001.pt";
   REQUIRE(fs::exists(v1));
-  CHECK(p2i::testing::ReadFile(dir + "/r1/checkpoint.pt") == p2i::testing::ReadFile(v1));
+  CHECK(p2i::testing::ReadFile(t.dir + "/r1/checkpoint.pt") == p2i::testing::ReadFile(v1));
 
   // Shards: frames are published in turn, so each rank's seq % 2 keeps every other one of the
   // 16 sim frames: the poses rank 0 trained on are all of one parity.
-  const std::set<int> frames = FramesOf(sim, v.poses_path());
+  const std::set<int> frames = FramesOf(t.sim, v.poses_path());
   CHECK(frames.count(-1) == 0);
   CHECK(frames.size() >= 3);
   std::set<int> parities;
   for (int f : frames) parities.insert(f % 2);
   CHECK(parities.size() == 1);
 
-  CHECK(r0->Terminate() == 0);
-  CHECK(r1->Terminate() == 0);
-  fs::remove_all(dir);
+  CHECK(t.r0->Terminate() == 0);
+  CHECK(t.r1->Terminate() == 0);
+  fs::remove_all(t.dir);
 }
 
 TEST_CASE("p2i_trainer world_size 2: rank 1 SIGKILLed mid-run ends rank 0's training with "
           "'lost contact' in its TrainerStatus, and the last version loads",
           "[integration]") {
-  runtime::Shutdown::ResetForTesting();
-  runtime::testing::ScopedRunDir run_dir;
-  const std::string dir = trainer::testing::TempDir("dp_kill");
-  std::ofstream(dir + "/tiny.yaml") << trainer::testing::TinyConfig().ToYamlString();
-  const scene::RgbdDataset sim = trainer::testing::SimFrames(16);
-  Harness h(sim);
-  const std::string port = Port(1);
-  auto r0 = StartRank(dir, 0, port, "");
-  auto r1 = StartRank(dir, 1, port, "");
+  TwoRanks t("dp_kill", 1, "");
   const bool trained =
-      h.RunUntil([&] { return h.HighestVersion(0) >= 2; }, std::chrono::seconds(120));
-  INFO("rank 0:\n" << p2i::testing::ReadFile(dir + "/rank0.log") << "\nrank 1:\n"
-                   << p2i::testing::ReadFile(dir + "/rank1.log"));
+      t.h.RunUntil([&] { return t.h.HighestVersion(0) >= 2; }, std::chrono::seconds(120));
+  INFO(t.Logs());
   REQUIRE(trained);
-  ::kill(r1->pid(), SIGKILL);
-  CHECK(r1->Wait() == -SIGKILL);
-  const bool ended = h.RunUntil([&] { return h.Status(0).phase() == "error"; },
+  ::kill(t.r1->pid(), SIGKILL);
+  CHECK(t.r1->Wait() == -SIGKILL);
+  const bool ended = t.h.RunUntil([&] { return t.h.Status(0).phase() == "error"; },
                                 std::chrono::seconds(60));
-  INFO("rank 0 after the kill:\n" << p2i::testing::ReadFile(dir + "/rank0.log"));
+  INFO("rank 0 after the kill:\n" << p2i::testing::ReadFile(t.dir + "/rank0.log"));
   REQUIRE(ended);
-  const auto s = h.Status(0);
+  const auto s = t.h.Status(0);
   CHECK(s.error().find("lost contact with the other ranks") != std::string::npos);
   CHECK(s.rank() == 0);
   CHECK(s.world_size() == 2);
 
   // The newest version rank 0 published is whole: a tool loads it.
-  const uint64_t last = h.HighestVersion(0);
+  const uint64_t last = t.h.HighestVersion(0);
   std::string path;
-  for (const auto& v : h.Versions(0))
+  for (const auto& v : t.h.Versions(0))
     if (v.version() == last) path = v.checkpoint_path();
   REQUIRE(fs::exists(path));
   int code = -1;
   const std::string out = p2i::testing::RunCommand(
-      "'" + p2i::testing::BinDir() + "/p2i' export '" + path + "' --out '" + dir +
+      "'" + p2i::testing::BinDir() + "/p2i' export '" + path + "' --out '" + t.dir +
           "/exported.pt' 2>&1",
       &code);
   INFO(out);
   CHECK(code == 0);
-  CHECK(fs::exists(dir + "/exported.pt"));
-  CHECK(r0->Terminate() == 0);  // the node outlives its training's end and stops cleanly
-  fs::remove_all(dir);
+  CHECK(fs::exists(t.dir + "/exported.pt"));
+  CHECK(t.r0->Terminate() == 0);  // the node outlives its training's end and stops cleanly
+  fs::remove_all(t.dir);
 }
 
 TEST_CASE("p2i_trainer world_size 2: rank 1 stopped between rounds ends rank 0's training "
           "cleanly, with a stop message instead of 'lost contact'",
           "[integration]") {
-  runtime::Shutdown::ResetForTesting();
-  runtime::testing::ScopedRunDir run_dir;
-  const std::string dir = trainer::testing::TempDir("dp_stop");
-  std::ofstream(dir + "/tiny.yaml") << trainer::testing::TinyConfig().ToYamlString();
-  const scene::RgbdDataset sim = trainer::testing::SimFrames(16);
-  Harness h(sim);
-  const std::string port = Port(2);
-  auto r0 = StartRank(dir, 0, port, "");
-  auto r1 = StartRank(dir, 1, port, "");
+  TwoRanks t("dp_stop", 2, "");
   // No frames: both ranks met (the first poll is the rendezvous) and wait between rounds.
-  const bool waiting = h.SpinUntil(
-      [&] { return h.Status(0).phase() == "waiting" && h.Status(1).phase() == "waiting"; },
+  const bool waiting = t.h.SpinUntil(
+      [&] { return t.h.Status(0).phase() == "waiting" && t.h.Status(1).phase() == "waiting"; },
       std::chrono::seconds(60));
-  INFO("rank 0:\n" << p2i::testing::ReadFile(dir + "/rank0.log") << "\nrank 1:\n"
-                   << p2i::testing::ReadFile(dir + "/rank1.log"));
+  INFO(t.Logs());
   REQUIRE(waiting);
-  CHECK(r1->Terminate() == 0);  // SIGTERM: the node's shutdown
+  CHECK(t.r1->Terminate() == 0);  // SIGTERM: the node's shutdown
   // Well within dist_timeout (30 s): rank 0 learns it at the next poll, not by a timeout.
-  const bool ended = h.SpinUntil([&] { return h.Status(0).phase() == "stopped"; },
+  const bool ended = t.h.SpinUntil([&] { return t.h.Status(0).phase() == "stopped"; },
                                  std::chrono::seconds(15));
-  INFO("rank 0 after rank 1's stop:\n" << p2i::testing::ReadFile(dir + "/rank0.log"));
+  INFO("rank 0 after rank 1's stop:\n" << p2i::testing::ReadFile(t.dir + "/rank0.log"));
   REQUIRE(ended);
-  const auto s = h.Status(0);
+  const auto s = t.h.Status(0);
   CHECK(s.error().find("rank 1 was stopped (its node shut down) between rounds") !=
         std::string::npos);
   CHECK(s.error().find("lost contact") == std::string::npos);
-  CHECK(p2i::testing::ReadFile(dir + "/rank0.log").find("rank 1 was stopped") !=
+  CHECK(p2i::testing::ReadFile(t.dir + "/rank0.log").find("rank 1 was stopped") !=
         std::string::npos);  // the node logs why its training ended
-  CHECK(r0->Terminate() == 0);
-  fs::remove_all(dir);
+  CHECK(t.r0->Terminate() == 0);
+  fs::remove_all(t.dir);
 }
 
 TEST_CASE("p2i_trainer world_size 2: rank 0 stopped mid-run ends rank 1's training cleanly, and "
           "rank 0's checkpoint loads",
           "[integration]") {
-  runtime::Shutdown::ResetForTesting();
-  runtime::testing::ScopedRunDir run_dir;
-  const std::string dir = trainer::testing::TempDir("dp_stop_run");
-  std::ofstream(dir + "/tiny.yaml") << trainer::testing::TinyConfig().ToYamlString();
-  const scene::RgbdDataset sim = trainer::testing::SimFrames(16);
-  Harness h(sim);
-  const std::string port = Port(3);
-  auto r0 = StartRank(dir, 0, port, "");
-  auto r1 = StartRank(dir, 1, port, "");
+  TwoRanks t("dp_stop_run", 3, "");
   const bool trained =
-      h.RunUntil([&] { return h.HighestVersion(0) >= 2; }, std::chrono::seconds(120));
-  INFO("rank 0:\n" << p2i::testing::ReadFile(dir + "/rank0.log") << "\nrank 1:\n"
-                   << p2i::testing::ReadFile(dir + "/rank1.log"));
+      t.h.RunUntil([&] { return t.h.HighestVersion(0) >= 2; }, std::chrono::seconds(120));
+  INFO(t.Logs());
   REQUIRE(trained);
   // During a round (the per-step stop flag) or between rounds (the poll): either way clean.
-  CHECK(r0->Terminate() == 0);
-  const bool ended = h.SpinUntil([&] { return h.Status(1).phase() == "stopped"; },
+  CHECK(t.r0->Terminate() == 0);
+  const bool ended = t.h.SpinUntil([&] { return t.h.Status(1).phase() == "stopped"; },
                                  std::chrono::seconds(15));
-  INFO("rank 1 after rank 0's stop:\n" << p2i::testing::ReadFile(dir + "/rank1.log"));
+  INFO("rank 1 after rank 0's stop:\n" << p2i::testing::ReadFile(t.dir + "/rank1.log"));
   REQUIRE(ended);
-  const auto s = h.Status(1);
+  const auto s = t.h.Status(1);
   CHECK((s.error().find("rank 0 was stopped") != std::string::npos ||
          s.error().find("another rank was stopped during a round") != std::string::npos));
   CHECK(s.error().find("lost contact") == std::string::npos);
   int code = -1;
   const std::string out = p2i::testing::RunCommand(
-      "'" + p2i::testing::BinDir() + "/p2i' export '" + dir + "/r0/checkpoint.pt' --out '" +
-          dir + "/exported.pt' 2>&1",
+      "'" + p2i::testing::BinDir() + "/p2i' export '" + t.dir + "/r0/checkpoint.pt' --out '" +
+          t.dir + "/exported.pt' 2>&1",
       &code);
   INFO(out);
   CHECK(code == 0);
-  CHECK(r1->Terminate() == 0);
-  fs::remove_all(dir);
+  CHECK(t.r1->Terminate() == 0);
+  fs::remove_all(t.dir);
 }
