@@ -53,6 +53,8 @@ std::string FusionVersionManifest::ToJson() const {
   j["width"] = width;
   j["height"] = height;
   j["voxel_size_m"] = voxel_size_m;
+  j["block_resolution"] = block_resolution;
+  j["trunc_voxels"] = trunc_voxels;
   j["val_psnr"] = val_psnr;
   j["val_psnr_blend"] = val_psnr_blend;
   return j.dump(2);
@@ -79,6 +81,8 @@ FusionVersionManifest FusionVersionManifest::FromJson(const std::string& text,
     m.width = j.at("width").get<int>();
     m.height = j.at("height").get<int>();
     m.voxel_size_m = j.at("voxel_size_m").get<double>();
+    m.block_resolution = j.value("block_resolution", m.block_resolution);
+    m.trunc_voxels = j.value("trunc_voxels", m.trunc_voxels);
     m.val_psnr = j.value("val_psnr", 0.0);
     m.val_psnr_blend = j.value("val_psnr_blend", 0.0);
   } catch (const nlohmann::json::exception& e) {

@@ -28,7 +28,9 @@ struct FusionVersionManifest {
   uint64_t keyframe_count = 0;
   int width = 0;                     ///< rendered view size
   int height = 0;
-  double voxel_size_m = 0.0;
+  double voxel_size_m = 0.0;         ///< of the TSDF snapshot (fusion::TsdfOptions::voxel_size_m)
+  int block_resolution = 16;         ///< of the TSDF snapshot (fusion::TsdfOptions::block_resolution)
+  double trunc_voxels = 4.0;         ///< of the TSDF snapshot (fusion::TsdfOptions::trunc_voxels)
   double val_psnr = 0.0;             ///< held-out (leave-one-out) PSNR of the refined view, dB
   double val_psnr_blend = 0.0;       ///< same frames, plain blend, dB
 

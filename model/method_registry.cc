@@ -69,7 +69,8 @@ std::vector<MethodInfo> MakeTable() {
                {"k", "metres_per_degree", "z_tolerance", "fill_holes"}, ConfigureWarp});
   t.push_back({"fusion", {}, "TSDF geometry (raycast) coloured by view-dependent blending of the k "
                "best visible keyframes (fusion/), optionally refined by a learned U-Net (refine/)",
-               false, "", "", refine::FusionMethodOptionKeys(), refine::ConfigureFusionMethod});
+               false, "", "", refine::FusionMethodOptionKeys(), refine::ConfigureFusionMethod,
+               /*loads_versions=*/true});
   t.push_back({"open3d_tsdf", {}, "Open3D's own voxel-colour raycast of the same TSDF (fusion/)",
                false, "", "", fusion::FusionOptionKeys(), fusion::ConfigureOpen3dTsdf});
   return t;

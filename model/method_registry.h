@@ -32,7 +32,13 @@ struct MethodInputs {
   /// methods.
   std::shared_ptr<const scene::RgbdDataset> training;
   /// Learned methods: the checkpoint to load (written by model::Trainer or `p2i export`).
+  /// Methods with MethodInfo::loads_versions: a published model version folder to build from
+  /// instead of `training` ("" = build over `training`).
   std::string checkpoint_path;
+  /// Output size of a method built from a model version (the version's frames are
+  /// centre-cropped and resized to it); 0 x 0 = the version's own frame size.
+  int width = 0;
+  int height = 0;
   int threads = 1;  ///< LibTorch threads of learned methods (process-wide)
 };
 
@@ -60,6 +66,10 @@ struct MethodInfo {
   /// them once, at start-up; returns the factory. Bad keys or values throw std::runtime_error
   /// naming `source`, the line and the key.
   std::function<MethodFactory(const YAML::Node& options, const std::string& source)> configure;
+  /// Not learned, but also built from a published model version (MethodInputs::checkpoint_path:
+  /// a folder the trainer node writes while it maps, e.g. fusion's TSDF snapshots), so the
+  /// synthesizer hot-swaps its versions like a learned method's checkpoints.
+  bool loads_versions = false;
 };
 
 /// The training frames of `in`, or std::invalid_argument "method 'NAME' needs training frames

@@ -12,6 +12,7 @@
 
 #include "fusion/fusion_methods.h"
 #include "fusion/fusion_synthesizer.h"
+#include "fusion/fusion_version_io.h"
 #include "model/learned_refiner.h"
 #include "refine/leave_one_out.h"
 #include "scene/strict_yaml_reader.h"
@@ -69,6 +70,19 @@ std::shared_ptr<model::LearnedRefiner> BuildRefiner(const FusionRefineOptions& o
   train.threads = std::max(1, threads);
   refiner->refiner().Fit(samples, train);
   return refiner;
+}
+
+/// The method built from a published version (the trainer node maps online): the version's
+/// refinement file when it has one, else `refine.net` as it is (fine-tuning is the mapper's, not
+/// repeated at every hot swap).
+std::unique_ptr<model::ViewSynthesizer> FromVersion(const model::MethodInputs& in,
+                                                    const fusion::FusionOptions& options,
+                                                    const FusionRefineOptions& refine) {
+  fusion::LoadedFusionVersion v =
+      fusion::LoadFusionVersion(in.checkpoint_path, options, in.width, in.height);
+  const std::string net = !v.refine_path.empty() ? v.refine_path : refine.net;
+  if (!net.empty()) v.synthesizer->SetRefiner(model::LearnedRefiner::Load(net, options.scene.blend.k));
+  return std::move(v.synthesizer);
 }
 
 }  // namespace
@@ -144,6 +158,7 @@ model::MethodFactory ConfigureFusionMethod(const YAML::Node& options, const std:
     fusion_options.Validate();
   }
   return [fusion_options, refine](const model::MethodInputs& in) -> std::unique_ptr<model::ViewSynthesizer> {
+    if (!in.checkpoint_path.empty()) return FromVersion(in, fusion_options, refine);
     const scene::RgbdDataset& frames = model::RequireTrainingFrames(in, "fusion");
     auto synth = std::make_unique<fusion::FusionSynthesizer>(frames, fusion_options);
     if (refine.Enabled()) {

@@ -51,6 +51,12 @@ scene::RgbdDataset LoadTrainingData(const std::string& spec, int width, int heig
   return out;
 }
 
+bool VersionIsFor(const std::string& version_method, const std::string& serving_method) {
+  if (version_method.empty()) return true;  // an older trainer's versions name no method
+  const model::MethodInfo* of = model::FindMethod(version_method);
+  return of != nullptr && of->name == serving_method;
+}
+
 SynthesizerLoader MakeLoader(const std::string& method, const LoaderOptions& options,
                              std::shared_ptr<const scene::RgbdDataset> training) {
   const model::MethodInfo& info = model::GetMethod(method);
@@ -65,13 +71,20 @@ SynthesizerLoader MakeLoader(const std::string& method, const LoaderOptions& opt
   model::MethodInputs inputs;
   inputs.training = std::move(training);
   inputs.threads = options.threads;
+  inputs.width = options.width;
+  inputs.height = options.height;
   if (!info.learned) {
     const auto& t = inputs.training;
-    if (!t || t->frames.empty() || t->frames.front().rgb.empty()) {
+    const bool has_frames = t && !t->frames.empty() && !t->frames.front().rgb.empty();
+    if (!has_frames && !info.loads_versions) {
       throw std::invalid_argument("method '" + info.name +
                                   "' needs training frames: set the dataset parameter");
     }
-    return [factory, inputs](const ModelSpec&) { return factory(inputs); };
+    return [factory, inputs](const ModelSpec& spec) {
+      model::MethodInputs in = inputs;
+      in.checkpoint_path = spec.checkpoint_path;  // "" = over the training frames
+      return factory(in);
+    };
   }
   return [factory, inputs](const ModelSpec& spec) {
     if (spec.checkpoint_path.empty()) {

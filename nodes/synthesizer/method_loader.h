@@ -29,13 +29,22 @@ struct LoaderOptions {
   /// The method's own options as a YAML map ("{k: 4, fill_holes: true}" for warp; keys per
   /// method in model/method_registry.cc); "" = the method's defaults.
   std::string method_options;
+  /// Output size of a method built from a model version (MethodInputs::width / height).
+  int width = 0;
+  int height = 0;
 };
 
 /// A loader for `method` (a name or alias of model::Methods()): learned methods load
-/// spec.checkpoint_path; the others are built over `training` (which must have frames) and
-/// ignore the checkpoint. The options are read and checked here, at start-up. Throws
-/// std::invalid_argument for an unknown method, bad options or a non-learned method without
-/// training frames.
+/// spec.checkpoint_path; the others are built over `training` and ignore the checkpoint, except
+/// that methods with MethodInfo::loads_versions (fusion) are built from spec.checkpoint_path (a
+/// published version folder) when it is set. The options are read and checked here, at
+/// start-up. Throws std::invalid_argument for an unknown method, bad options, or a non-learned
+/// method without training frames that cannot load versions either.
+/// Whether a ModelVersion of `version_method` (ModelVersion.method: a name or alias, "" =
+/// unnamed) is for a synthesizer serving `serving_method` (a canonical name): a P2I-NET trainer
+/// and a fusion mapper may publish on one topic.
+bool VersionIsFor(const std::string& version_method, const std::string& serving_method);
+
 SynthesizerLoader MakeLoader(const std::string& method, const LoaderOptions& options,
                              std::shared_ptr<const scene::RgbdDataset> training);
 

@@ -23,7 +23,7 @@ SynthesizerNode::SynthesizerNode(const runtime::NodeArgs& args)
   StartCore(&options);
   ServeRender();
   if (options.topic_mode) StartTopicMode();
-  if (learned_) SubscribeModelVersions();
+  if (versioned_) SubscribeModelVersions();
   StartStatusTimer();
 }
 
@@ -37,6 +37,7 @@ void SynthesizerNode::StartCore(SynthesizerOptions* options) {
     const model::MethodInfo& method = model::GetMethod(core_options.method);
     core_options.method = method.name;  // an alias ("p2i_net") serves under the canonical name
     learned_ = method.learned;
+    versioned_ = method.learned || method.loads_versions;
     auto training = std::make_shared<const scene::RgbdDataset>(
         LoadTrainingData(dataset, options->width, options->height, /*with_frames=*/!learned_,
                          options->dataset_stride));
@@ -50,9 +51,9 @@ void SynthesizerNode::StartCore(SynthesizerOptions* options) {
     loader = MakeLoader(core_options.method, options->loader, training);
     core_ = std::make_unique<SynthesizerCore>(core_options, loader, coverage);
     core_->SetCountHook([this](const std::string& key, uint64_t n) { Count(key, n); });
-    if (!learned_) {
+    if (!learned_ && !training->frames.empty()) {
       core_->LoadNow({0, "", core_options.method});
-    } else if (!checkpoint.empty()) {
+    } else if (learned_ && !checkpoint.empty()) {
       core_->LoadNow({0, checkpoint, core_options.method});
     }
   } catch (const std::invalid_argument& e) {
@@ -94,6 +95,15 @@ void SynthesizerNode::StartTopicMode() {
 
 void SynthesizerNode::SubscribeModelVersions() {
   Subscribe<msgs::pb::ModelVersion>("model_version", [this](const msgs::pb::ModelVersion& mv) {
+    // Versions of another method (a P2I-NET trainer and a fusion mapper on one topic) are not
+    // this synthesizer's to load.
+    if (!VersionIsFor(mv.method(), core_->options().method)) {
+      Count("versions_other_method");
+      WarnThrottled("version_method", "ignoring model version " + std::to_string(mv.version()) +
+                                          " of method '" + mv.method() + "' (this synthesizer "
+                                          "serves " + core_->options().method + ")");
+      return;
+    }
     ModelSpec spec{mv.version(), mv.checkpoint_path(), core_->options().method,
                    mv.poses_path()};
     if (core_->SwapAsync(spec)) {

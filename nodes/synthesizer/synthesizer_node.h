@@ -33,7 +33,7 @@ class SynthesizerNode : public runtime::Node {
   void StartCore(SynthesizerOptions* options);  // training data, loader, core, first model
   void ServeRender();                           // the render service
   void StartTopicMode();                        // planned_poses -> views
-  void SubscribeModelVersions();                // hot swaps (learned methods)
+  void SubscribeModelVersions();                // hot swaps (learned methods, fusion)
   void StartStatusTimer();                      // model_version / has_model, swap errors
 
   bool OnPlannedPose(msgs::WireMessage&& wire, const msgs::pb::Header& header);
@@ -42,6 +42,7 @@ class SynthesizerNode : public runtime::Node {
   std::shared_ptr<runtime::Publisher<msgs::View>> views_pub_;
   std::unique_ptr<TopicRenderer> topic_;
   bool learned_ = false;
+  bool versioned_ = false;  ///< hot-swaps ModelVersions: learned, or MethodInfo::loads_versions
   std::string last_swap_error_;  ///< logged once per new failure
 };
 

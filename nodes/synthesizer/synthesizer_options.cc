@@ -35,11 +35,16 @@ SynthesizerOptions SynthesizerOptions::FromParameters(runtime::Parameters& param
       "checkpoint", o.checkpoint, "learned methods: start-up checkpoint; '' = wait for model_version");
   o.dataset = params.Declare<std::string>(
       "dataset", o.dataset,
-      "training data: frames for nearest/warp, poses for the coverage score; a dataset folder, "
-      "builtin:NAME (default arm sweep rendered at width x height) or '' (coverage 0)");
-  o.width = params.Declare<int>("width", o.width, "resolution of built-in/resized training data");
-  o.height =
-      params.Declare<int>("height", o.height, "resolution of built-in/resized training data");
+      "training data: frames for nearest/warp/fusion, poses for the coverage score; a dataset "
+      "folder, builtin:NAME (default arm sweep rendered at width x height) or '' (coverage 0; "
+      "fusion then waits for the trainer's versions on model_version)");
+  o.width = params.Declare<int>("width", o.width, "resolution of built-in/resized training data and of views "
+                                  "built from a fusion version");
+  o.height = params.Declare<int>("height", o.height,
+                                 "resolution of built-in/resized training data and of views "
+                                 "built from a fusion version");
+  o.loader.width = o.width;  // methods built from a model version render at this size
+  o.loader.height = o.height;
   o.dataset_stride =
       params.Declare<int>("dataset_stride", o.dataset_stride, "keep every N-th training frame");
   o.loader.threads =

@@ -21,7 +21,21 @@ TrainerNode::TrainerNode(const runtime::NodeArgs& args) : Node("trainer", args) 
   shutdown_wait_s_ = options.shutdown_wait;
   ParametersDone();
   SetRank(options.loop.distributed);
+  const std::string work_dir =
+      options.work_dir.empty() ? runtime::RunDir() + "/" + Name() : options.work_dir;
 
+  runtime::PublisherOptions latched;
+  latched.latched = true;
+  version_pub_ = Advertise<msgs::pb::ModelVersion>("model_version", latched);
+  status_pub_ = Advertise<msgs::pb::TrainerStatus>("trainer_status");
+  if (options.method == "fusion") {
+    StartMapper(options, work_dir);
+  } else {
+    StartTraining(options, work_dir);
+  }
+}
+
+void TrainerNode::StartTraining(TrainerNodeOptions& options, const std::string& work_dir) {
   model::P2iConfig config = options.config_file.empty()
                                 ? model::P2iConfig()
                                 : model::P2iConfig::FromYamlFile(options.config_file);
@@ -36,8 +50,6 @@ TrainerNode::TrainerNode(const runtime::NodeArgs& args) : Node("trainer", args) 
     }
   }
   config.Validate();
-  const std::string work_dir =
-      options.work_dir.empty() ? runtime::RunDir() + "/" + Name() : options.work_dir;
 
   ReplayBuffer::Options& b = options.buffer;
   b.dir = work_dir + "/buffer";
@@ -46,11 +58,6 @@ TrainerNode::TrainerNode(const runtime::NodeArgs& args) : Node("trainer", args) 
   buffer_ = std::make_unique<ReplayBuffer>(b);
   Log().info("replay buffer: capacity {} frames ({} recent), {} reloaded from {}",
              buffer_->Capacity(), buffer_->RecentCapacity(), buffer_->Reloaded(), b.dir);
-
-  runtime::PublisherOptions latched;
-  latched.latched = true;
-  version_pub_ = Advertise<msgs::pb::ModelVersion>("model_version", latched);
-  status_pub_ = Advertise<msgs::pb::TrainerStatus>("trainer_status");
 
   const std::string& dataset = options.dataset;
   if (!dataset.empty()) {
@@ -95,6 +102,60 @@ TrainerNode::TrainerNode(const runtime::NodeArgs& args) : Node("trainer", args) 
   loop_->Start();
 }
 
+void TrainerNode::StartMapper(TrainerNodeOptions& options, const std::string& work_dir) {
+  FusionMapperOptions mo = options.mapper;
+  mo.work_dir = work_dir;
+  mapper_ = std::make_unique<FusionMapper>(
+      mo, [this](const model::FusionVersionManifest& m, const std::string& dir) {
+        if (closing_) return;  // the last version of a shutdown stays on disk for a restart
+        msgs::pb::ModelVersion v;
+        v.set_version(m.version);
+        v.set_checkpoint_path(dir);
+        v.set_step(m.frames_integrated);
+        v.set_method("fusion");
+        v.set_width(static_cast<uint32_t>(m.width));
+        v.set_height(static_cast<uint32_t>(m.height));
+        version_pub_->Publish(v);
+        Count("versions_published");
+        Log().info("fusion version {} ({} frames integrated, {} keyframes): {}", m.version,
+                   m.frames_integrated, m.keyframe_count, dir);
+      });
+  Log().info("method fusion: mapping online, a version every {} integrated frames into {}",
+             mo.publish_every_frames, mapper_->VersionsDir());
+  if (!options.dataset.empty()) {
+    const scene::DatasetIndex index = scene::OpenDataset(options.dataset);
+    for (size_t i = 0; i < index.size(); ++i)
+      mapper_->Submit(index.Load(i), index.camera(), /*wait=*/true);
+    Log().info("offline: {} frames from {} queued for mapping", index.size(), options.dataset);
+  } else {
+    frame_sub_ = Subscribe<msgs::RgbdFrame>("rgbd", [this](const msgs::RgbdFrame& f) {
+      OnFrame(f);
+    });
+  }
+  if (options.trainer_status_period > 0)
+    AddTimer(std::chrono::nanoseconds(static_cast<int64_t>(options.trainer_status_period * 1e9)),
+             [this] { PublishMapperStatus(); });
+}
+
+void TrainerNode::PublishMapperStatus() {
+  const FusionMapper::Stats st = mapper_->GetStats();
+  SetValue("frames_integrated", static_cast<double>(st.integrated));
+  SetValue("keyframes", static_cast<double>(st.keyframes));
+  SetValue("frames_dropped_busy", static_cast<double>(st.dropped));
+  SetValue("frames_rejected", static_cast<double>(st.rejected));
+  SetValue("integrate_ms", st.last_integrate_ms);
+  if (st.last_error != last_mapper_error_) {
+    last_mapper_error_ = st.last_error;
+    Log().warn("mapping: {}", st.last_error);
+  }
+  msgs::pb::TrainerStatus s;
+  s.set_step(st.integrated);
+  s.set_buffer_size(st.keyframes);
+  s.set_phase(st.integrated == 0 ? "waiting" : "mapping");
+  s.set_world_size(1);
+  status_pub_->Publish(s);
+}
+
 TrainerNode::~TrainerNode() = default;
 
 void TrainerNode::SetRank(const model::DistributedOptions& distributed) {
@@ -121,6 +182,15 @@ void TrainerNode::OnFrame(const msgs::RgbdFrame& frame) {
   }
   try {
     const scene::CameraInfo camera = convert::FromMsg(frame.meta.camera_info());
+    if (mapper_) {
+      if (!frame.meta.has_pose()) {
+        Count("frames_without_pose");
+        return;
+      }
+      mapper_->Submit(convert::ToSample(frame), camera);
+      Count("frames_accepted");
+      return;
+    }
     if (!buffer_->Add(convert::ToSample(frame), camera, frame.meta.has_pose())) {
       Count("frames_without_pose");
       return;
@@ -134,6 +204,14 @@ void TrainerNode::OnFrame(const msgs::RgbdFrame& frame) {
 }
 
 void TrainerNode::OnShutdown() {
+  if (mapper_) {
+    closing_ = true;
+    mapper_->Stop();  // integrates what is queued and writes a last version (not published)
+    const FusionMapper::Stats st = mapper_->GetStats();
+    Log().info("mapping stopped: {} frames integrated, {} keyframes, {} dropped while busy, last "
+               "version {}", st.integrated, st.keyframes, st.dropped, st.last_version);
+    return;
+  }
   if (!loop_) return;
   closing_ = true;
   // The round stops at its next step boundary and saves checkpoint.pt (TrainingLoop::Stop).

@@ -2,6 +2,8 @@
 /// @brief The trainer node's parameters -> TrainerNodeOptions, and their validation.
 #include "nodes/trainer/trainer_node_options.h"
 
+#include <yaml-cpp/yaml.h>
+
 #include "model/distributed.h"
 #include "nodes/runtime/option_error.h"
 
@@ -34,10 +36,40 @@ void DeclareLoop(runtime::Parameters& p, TrainingLoop::Options* o) {
                                   "s: rendezvous and every collective of the ranks");
 }
 
+void DeclareMapper(runtime::Parameters& p, FusionMapperOptions* o) {
+  const YAML::Node scene = p.Declare<YAML::Node>(
+      "fusion_options", YAML::Node(),
+      "method fusion: {tsdf: {...}, blend: {...}} as for the fusion method (docs/FUSION.md)");
+  if (scene.IsDefined() && !scene.IsNull()) {
+    // A launch file's quoted "{tsdf: ...}" arrives as a string; a command line's as a map.
+    const YAML::Node map = scene.IsScalar() ? YAML::Load(scene.as<std::string>()) : scene;
+    try {
+      o->scene = fusion::FusionSceneOptions::FromYaml(map, "trainer parameter fusion_options");
+    } catch (const std::runtime_error& e) {
+      throw std::invalid_argument(e.what());
+    }
+  }
+  o->publish_every_frames = p.Declare<int>(
+      "publish_every_frames", o->publish_every_frames,
+      "method fusion: integrated frames between published versions");
+  o->keep_versions = p.Declare<int>("keep_versions", o->keep_versions,
+                                    "method fusion: committed versions kept on disk");
+  o->queue_frames = p.Declare<int>(
+      "queue_frames", o->queue_frames,
+      "method fusion: frames waiting for integration (older ones are dropped, counted)");
+  o->refine_net = p.Declare<std::string>(
+      "refine_net", o->refine_net,
+      "method fusion: refinement file copied into every version ('' = plain blend)");
+}
+
 }  // namespace
 
 TrainerNodeOptions TrainerNodeOptions::FromParameters(runtime::Parameters& p) {
   TrainerNodeOptions o;  // the defaults, written once in the field initialisers
+  o.method = p.Declare<std::string>(
+      "method", o.method,
+      "p2i (train the config's network) or fusion (map online: TSDF + keyframes, versions)");
+  DeclareMapper(p, &o.mapper);
   o.config_file = p.Declare<std::string>("config", o.config_file,
                                          "P2I-NET config YAML (model/presets/); empty = defaults");
   o.resolution = p.Declare<int>("resolution", o.resolution,
@@ -65,6 +97,18 @@ TrainerNodeOptions TrainerNodeOptions::FromParameters(runtime::Parameters& p) {
 void TrainerNodeOptions::Validate() const {
   using runtime::CheckOption;
   const char* n = "trainer";
+  CheckOption(method == "p2i" || method == "fusion", n, "method", method,
+              "be p2i or fusion", "method:=p2i trains P2I-NET, method:=fusion maps online");
+  if (method == "fusion") {
+    CheckOption(loop.distributed.world_size == 1, n, "world_size", loop.distributed.world_size,
+                "be 1 with method fusion", "one mapper per camera: world_size:=1");
+    CheckOption(mapper.publish_every_frames >= 1, n, "publish_every_frames",
+                mapper.publish_every_frames, "be >= 1", "e.g. publish_every_frames:=30");
+    CheckOption(mapper.keep_versions >= 1, n, "keep_versions", mapper.keep_versions, "be >= 1",
+                "e.g. keep_versions:=3");
+    CheckOption(mapper.queue_frames >= 1, n, "queue_frames", mapper.queue_frames, "be >= 1",
+                "e.g. queue_frames:=2");
+  }
   CheckOption(resolution >= 0, n, "resolution", resolution, "be >= 0",
               "resolution:=0 keeps the config's");
   CheckOption(buffer.max_mb > 0.0, n, "buffer_mb", buffer.max_mb, "be > 0", "e.g. buffer_mb:=256");

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "nodes/runtime/parameters.h"
+#include "nodes/trainer/fusion_mapper.h"
 #include "nodes/trainer/replay_buffer.h"
 #include "nodes/trainer/training_loop.h"
 
@@ -18,6 +19,11 @@ namespace p2i::trainer {
 /// dist_address / dist_timeout -> loop.distributed, ...); the node fills in the rest (the
 /// model config, work_dir, resolution) when it starts. A value type: thread-compatible.
 struct TrainerNodeOptions {
+  /// What the node trains: "p2i" (the learned network of `config`: P2I-NET, or the CNN
+  /// baseline) or "fusion" (online mapping: FusionMapper; `config`, the buffer and the loop
+  /// parameters are not used).
+  std::string method = "p2i";
+  FusionMapperOptions mapper;  ///< method fusion: fusion_options, publish_every_frames, ...
   std::string config_file;  ///< P2I-NET config YAML (model/presets/); "" = defaults
   int resolution = 0;       ///< overrides the config's resolution; 0 = keep
   std::string dataset;      ///< offline: dataset folder to train on; "" = online ("rgbd")

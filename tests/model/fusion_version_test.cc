@@ -28,6 +28,8 @@ FusionVersionManifest Manifest(uint64_t v, const std::string& keyframes) {
   m.width = 32;
   m.height = 24;
   m.voxel_size_m = 0.02;
+  m.block_resolution = 8;
+  m.trunc_voxels = 3.0;
   return m;
 }
 
@@ -52,6 +54,8 @@ TEST_CASE("A fusion version folder round-trips and refuses incomplete folders", 
   CHECK(m.keyframe_count == 3);
   CHECK(m.width == 32);
   CHECK(m.height == 24);
+  CHECK(m.block_resolution == 8);
+  CHECK(m.trunc_voxels == 3.0);
   CHECK_THROWS_WITH(WriteFusionVersion(dir, Manifest(3, ""), Payload),
                     Catch::Contains("never rewritten"));
 

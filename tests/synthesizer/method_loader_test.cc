@@ -4,8 +4,12 @@
 
 #include <catch2/catch.hpp>
 
+#include "fusion/fusion_version_io.h"
 #include "nodes/synthesizer/method_loader.h"
+#include "scene/capture.h"
+#include "scene/sim_scene.h"
 #include "scene/trajectory.h"
+#include "tests/temp_dir.h"
 
 namespace p2i::nodes {
 namespace {
@@ -55,6 +59,51 @@ TEST_CASE("Built-in training data and the nearest/warp loaders", "[unit]") {
   CHECK_THROWS(MakeLoader("cnn", {}, nullptr)({1, "/nonexistent/ckpt.pt", "cnn"}));
   CHECK(LoadTrainingData("", 32, 24, true).frames.empty());
   CHECK_THROWS(LoadTrainingData("/nonexistent/dataset", 32, 24, true));
+}
+
+
+TEST_CASE("fusion without training frames waits for versions and loads them at its size",
+          "[unit]") {
+  // What the trainer node with method fusion publishes: a TSDF snapshot and keyframes.
+  const p2i::testing::TempDir dir("loader_fusion_version");
+  const auto sim = scene::SimScene::BuiltIn("small_office");
+  const scene::CameraInfo cam = scene::SimScene::DefaultCamera(64, 48);
+  const auto sweep = scene::GenerateArmSweep({});
+  fusion::FusionScene fused(cam);
+  scene::CaptureWriter keyframes(dir.path() + "/keyframes", cam);
+  for (size_t i = 0; i < sweep.size(); i += 10) {
+    const scene::RgbdSample s = sim.Render(sweep[i].pose, cam, sweep[i].stamp);
+    fused.AddFrame(s);
+    keyframes.Append(s);
+  }
+  fusion::FusionVersionInfo info;
+  info.version = 1;
+  info.keyframes_dir = keyframes.folder();
+  info.keyframe_count = keyframes.size();
+  const std::string version = fusion::WriteSceneVersion(dir.path() + "/versions", fused, info);
+
+  LoaderOptions options;
+  options.width = 32;
+  options.height = 32;
+  const auto empty = std::make_shared<const scene::RgbdDataset>();
+  SynthesizerLoader loader;
+  REQUIRE_NOTHROW(loader = MakeLoader("fusion", options, empty));
+  const auto synth = loader({1, version, "fusion"});
+  CHECK(synth->Name() == "fusion");
+  CHECK(synth->Camera().image_width == 32);
+  const scene::RgbdSample v = synth->Render(sweep[20].pose);
+  CHECK(v.rgb.size() == cv::Size(32, 32));
+  CHECK(cv::countNonZero(v.depth > 0.0f) > 32 * 32 * 9 / 10);
+  CHECK_THROWS_WITH(loader({2, dir.path(), "fusion"}), Catch::Contains("manifest.json"));
+  // A P2I-NET trainer's versions on the same topic are not this synthesizer's.
+  CHECK(VersionIsFor("fusion", "fusion"));
+  CHECK(VersionIsFor("", "fusion"));
+  CHECK_FALSE(VersionIsFor("p2i_net", "fusion"));
+  CHECK(VersionIsFor("p2i_net", "p2i"));
+  CHECK_FALSE(VersionIsFor("fusion", "p2i"));
+  CHECK_FALSE(VersionIsFor("bogus", "p2i"));
+  // Methods that cannot load versions still need frames.
+  CHECK_THROWS_WITH(MakeLoader("warp", options, empty), Catch::Contains("needs training frames"));
 }
 
 }  // namespace

@@ -1,0 +1,74 @@
+/// @file fusion_version_io.cc
+/// @brief Writing a FusionScene as a fusion version, and building the method from one.
+#include "fusion/fusion_version_io.h"
+
+#include <filesystem>
+#include <stdexcept>
+
+#include "scene/capture.h"
+#include "scene/image_ops.h"
+
+namespace p2i::fusion {
+
+namespace fs = std::filesystem;
+
+std::string WriteSceneVersion(const std::string& versions_dir, FusionScene& scene,
+                              const FusionVersionInfo& info) {
+  const TsdfOptions& tsdf = scene.options().tsdf;
+  model::FusionVersionManifest m;
+  m.version = info.version;
+  m.frames_integrated = info.frames_integrated;
+  m.keyframes_dir = fs::absolute(info.keyframes_dir).string();
+  m.keyframe_count = info.keyframe_count;
+  m.width = scene.frame_camera().image_width;
+  m.height = scene.frame_camera().image_height;
+  m.voxel_size_m = tsdf.voxel_size_m;
+  m.block_resolution = tsdf.block_resolution;
+  m.trunc_voxels = tsdf.trunc_voxels;
+  m.refine_file = info.refine_source.empty() ? "" : "refine.pt";
+  const std::string dir = model::FusionVersionDir(versions_dir, info.version);
+  fs::create_directories(versions_dir);
+  model::WriteFusionVersion(dir, m, [&](const std::string& temp) {
+    scene.tsdf().Save(temp + "/" + m.tsdf_file);
+    if (!info.refine_source.empty())
+      fs::copy_file(info.refine_source, temp + "/" + m.refine_file);
+  });
+  return dir;
+}
+
+LoadedFusionVersion LoadFusionVersion(const std::string& dir, FusionOptions options, int width,
+                                      int height) {
+  LoadedFusionVersion out;
+  out.manifest = model::ReadFusionVersion(dir);
+  const model::FusionVersionManifest& m = out.manifest;
+  TsdfOptions& tsdf = options.scene.tsdf;
+  tsdf.voxel_size_m = m.voxel_size_m;
+  tsdf.block_resolution = m.block_resolution;
+  tsdf.trunc_voxels = m.trunc_voxels;
+  options.scene.blend.keyframe_min_distance = 0.0;  // the mapper chose them
+  try {
+    options.Validate();
+  } catch (const std::invalid_argument& e) {
+    throw std::runtime_error("fusion version " + dir + ": " + e.what());
+  }
+  const scene::DatasetIndex keyframes = scene::ReadCapture(m.keyframes_dir);
+  if (keyframes.size() < m.keyframe_count) {
+    throw std::runtime_error("fusion version " + dir + ": its keyframe folder " + m.keyframes_dir +
+                             " lists " + std::to_string(keyframes.size()) + " frames, the version " +
+                             "needs " + std::to_string(m.keyframe_count) +
+                             " (the folder was replaced or truncated)");
+  }
+  scene::RgbdDataset empty;
+  empty.camera = keyframes.camera();
+  const scene::CameraInfo output =
+      width > 0 && height > 0 ? scene::CenterCropResizeCamera(empty.camera, width, height)
+                              : empty.camera;
+  out.synthesizer = std::make_unique<FusionSynthesizer>(empty, options, output);
+  FusionScene& fused = out.synthesizer->scene();
+  fused.tsdf() = TsdfVolume::Load((fs::path(dir) / m.tsdf_file).string(), tsdf);
+  for (size_t i = 0; i < m.keyframe_count; ++i) fused.AddFrame(keyframes.Load(i), /*integrate=*/false);
+  if (!m.refine_file.empty()) out.refine_path = fs::absolute(fs::path(dir) / m.refine_file).string();
+  return out;
+}
+
+}  // namespace p2i::fusion

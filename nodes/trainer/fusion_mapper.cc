@@ -1,0 +1,179 @@
+/// @file fusion_mapper.cc
+/// @brief FusionMapper: the mapping thread (queue -> TSDF + keyframes -> versions).
+#include "nodes/trainer/fusion_mapper.h"
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <set>
+#include <stdexcept>
+
+#include "fusion/fusion_version_io.h"
+#include "scene/capture.h"
+
+namespace p2i::trainer {
+
+namespace fs = std::filesystem;
+
+void FusionMapperOptions::Validate() const {
+  const auto fail = [](const std::string& what) {
+    throw std::invalid_argument("fusion mapper: " + what);
+  };
+  scene.Validate();
+  if (work_dir.empty()) fail("work_dir is empty");
+  if (publish_every_frames < 1)
+    fail("publish_every_frames must be >= 1, got " + std::to_string(publish_every_frames));
+  if (keep_versions < 1) fail("keep_versions must be >= 1, got " + std::to_string(keep_versions));
+  if (queue_frames < 1) fail("queue_frames must be >= 1, got " + std::to_string(queue_frames));
+  if (!refine_net.empty() && !fs::is_regular_file(refine_net))
+    fail("refine_net: no file '" + refine_net + "' (a `p2i refine train-sim` output such as "
+         "models/refine_sim.pt, or '' for none)");
+}
+
+FusionMapper::FusionMapper(FusionMapperOptions options, VersionCallback on_version)
+    : options_(std::move(options)), on_version_(std::move(on_version)) {
+  options_.Validate();
+  versions_dir_ = (fs::absolute(options_.work_dir) / "versions").string();
+  fs::create_directories(versions_dir_);
+  model::PruneFusionVersions(versions_dir_, options_.keep_versions);  // a killed writer's temps
+  const std::vector<uint64_t> existing = model::ListFusionVersions(versions_dir_);
+  next_version_ = existing.empty() ? 1 : existing.back() + 1;
+  char name[32];
+  std::snprintf(name, sizeof(name), "keyframes_s%06llu",
+                static_cast<unsigned long long>(next_version_));
+  keyframes_dir_ = (fs::absolute(options_.work_dir) / name).string();
+  thread_ = std::thread([this] { Run(); });
+}
+
+FusionMapper::~FusionMapper() { Stop(); }
+
+void FusionMapper::Submit(scene::RgbdSample frame, const scene::CameraInfo& camera, bool wait) {
+  std::unique_lock<std::mutex> lock(mutex_);
+  ++stats_.received;
+  if (stopping_) return;
+  if (wait) {
+    cv_.wait(lock, [this] {
+      return stopping_ || queue_.size() < static_cast<size_t>(options_.queue_frames);
+    });
+  } else if (queue_.size() >= static_cast<size_t>(options_.queue_frames)) {
+    queue_.pop_front();
+    ++stats_.dropped;
+  }
+  queue_.push_back({std::move(frame), camera});
+  cv_.notify_all();
+}
+
+void FusionMapper::Stop() {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    stopping_ = true;
+  }
+  cv_.notify_all();
+  if (thread_.joinable()) thread_.join();
+}
+
+FusionMapper::Stats FusionMapper::GetStats() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return stats_;
+}
+
+void FusionMapper::Run() {
+  for (;;) {
+    Job job;
+    {
+      std::unique_lock<std::mutex> lock(mutex_);
+      cv_.wait(lock, [this] { return stopping_ || !queue_.empty(); });
+      if (queue_.empty()) break;  // stopping, everything queued integrated
+      job = std::move(queue_.front());
+      queue_.pop_front();
+    }
+    cv_.notify_all();  // a waiting Submit may queue now
+    Integrate(job);
+    if (unpublished_ >= static_cast<uint64_t>(options_.publish_every_frames)) Publish();
+  }
+  if (unpublished_ > 0) Publish();
+}
+
+void FusionMapper::Integrate(const Job& job) {
+  const auto t0 = std::chrono::steady_clock::now();
+  bool keyframe = false;
+  try {
+    if (!scene_) {
+      scene_ = std::make_unique<fusion::FusionScene>(job.camera, options_.scene);
+      // A folder of this name holds no committed version's keyframes (its number would be
+      // lower than next_version_ otherwise): what a killed session left is started over.
+      scene::CaptureWriter::Options capture;
+      capture.overwrite = true;
+      keyframes_ = std::make_unique<scene::CaptureWriter>(keyframes_dir_, job.camera, capture);
+    } else if (!job.camera.equals(scene_->frame_camera(), 1e-6)) {
+      throw std::invalid_argument("its camera differs from the first frame's (" +
+                                  std::to_string(scene_->frame_camera().image_width) + "x" +
+                                  std::to_string(scene_->frame_camera().image_height) +
+                                  "): one mapper maps one camera");
+    }
+    keyframe = scene_->AddFrame(job.frame);
+    if (keyframe) keyframes_->Append(job.frame);
+  } catch (const std::exception& e) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    ++stats_.rejected;
+    stats_.last_error = "frame '" + job.frame.id + "': " + e.what();
+    return;
+  }
+  ++unpublished_;
+  std::lock_guard<std::mutex> lock(mutex_);
+  ++stats_.integrated;
+  if (keyframe) ++stats_.keyframes;
+  stats_.last_integrate_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+void FusionMapper::Publish() {
+  fusion::FusionVersionInfo info;
+  info.version = next_version_;
+  info.keyframes_dir = keyframes_dir_;
+  info.keyframe_count = keyframes_->size();
+  info.refine_source = options_.refine_net;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    info.frames_integrated = stats_.integrated;
+  }
+  std::string dir;
+  try {
+    dir = fusion::WriteSceneVersion(versions_dir_, *scene_, info);
+  } catch (const std::exception& e) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    stats_.last_error = std::string("version ") + std::to_string(info.version) + ": " + e.what();
+    return;  // retried after the next publish_every_frames frames
+  }
+  ++next_version_;
+  unpublished_ = 0;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    ++stats_.versions;
+    stats_.last_version = info.version;
+  }
+  Prune();
+  if (on_version_) on_version_(model::ReadFusionVersion(dir), dir);
+}
+
+/// Old versions beyond keep_versions, and keyframe folders of earlier sessions that no kept
+/// version references.
+void FusionMapper::Prune() {
+  model::PruneFusionVersions(versions_dir_, options_.keep_versions);
+  std::set<std::string> used{keyframes_dir_};
+  for (const uint64_t v : model::ListFusionVersions(versions_dir_)) {
+    try {
+      used.insert(model::ReadFusionVersion(model::FusionVersionDir(versions_dir_, v)).keyframes_dir);
+    } catch (const std::exception&) {
+      // an unreadable version keeps nothing alive; the synthesizer refuses it with the reason
+    }
+  }
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(options_.work_dir, ec)) {
+    const std::string name = e.path().filename().string();
+    if (name.rfind("keyframes_s", 0) == 0 && !used.count(fs::absolute(e.path()).string()))
+      fs::remove_all(e.path(), ec);
+  }
+}
+
+}  // namespace p2i::trainer

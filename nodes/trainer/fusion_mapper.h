@@ -1,0 +1,107 @@
+/// @file fusion_mapper.h
+/// @brief The trainer node's `fusion` method: online mapping. Every camera frame is integrated
+/// into a TSDF as it arrives; frames far enough from the keyframes so far are appended to an
+/// append-only keyframe capture; every `publish_every_frames` integrated frames the TSDF is
+/// written as a committed model version (model/fusion_version.h) that the synthesizer hot-swaps.
+#pragma once
+
+#include <condition_variable>
+#include <cstdint>
+#include <deque>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+
+#include "fusion/fusion_scene.h"
+#include "model/fusion_version.h"
+#include "scene/camera_info.h"
+#include "scene/rgbd_sample.h"
+
+namespace p2i::scene {
+class CaptureWriter;
+}  // namespace p2i::scene
+
+namespace p2i::trainer {
+
+struct FusionMapperOptions {
+  fusion::FusionSceneOptions scene;  ///< TSDF (voxel size, ...) and keyframe choice
+  /// keyframes_sNNNNNN/ (one append-only capture per mapping session) and versions/ go here.
+  std::string work_dir;
+  int publish_every_frames = 30;  ///< integrated frames between published versions
+  int keep_versions = 3;          ///< committed versions kept on disk (older ones pruned)
+  /// Frames waiting for integration; when a new one arrives to a full queue the oldest is
+  /// dropped (counted): a camera faster than integration is mapped at integration's rate.
+  int queue_frames = 2;
+  /// A refinement file (`p2i refine train-sim` output) copied into every version; "" = none.
+  std::string refine_net;
+  /// Throws std::invalid_argument naming the field.
+  void Validate() const;
+};
+
+/// Thread-safety: Submit and GetStats from any thread; integration and version writing run on
+/// the mapper's own thread; `on_version` is called there.
+class FusionMapper {
+ public:
+  /// Called after each committed version, with its folder.
+  using VersionCallback =
+      std::function<void(const model::FusionVersionManifest& manifest, const std::string& dir)>;
+
+  struct Stats {
+    uint64_t received = 0;     ///< frames submitted
+    uint64_t integrated = 0;   ///< frames fused into the TSDF
+    uint64_t keyframes = 0;    ///< frames kept as colour sources
+    uint64_t dropped = 0;      ///< frames dropped from a full queue
+    uint64_t rejected = 0;     ///< frames refused (camera changed, bad images)
+    uint64_t versions = 0;     ///< versions written by this mapper
+    uint64_t last_version = 0;
+    double last_integrate_ms = 0.0;
+    std::string last_error;    ///< of the last rejected frame or failed version write
+  };
+
+  /// Starts the mapping thread. Version numbers continue after the highest committed one in
+  /// work_dir/versions (a synthesizer that served them takes the new ones as newer); the map
+  /// itself starts empty. Throws std::invalid_argument on bad options.
+  FusionMapper(FusionMapperOptions options, VersionCallback on_version);
+  ~FusionMapper();  ///< Stop()
+
+  /// Queues one frame (rgb CV_8UC3, depth CV_32FC1 metres, pose camera-to-world) of `camera`.
+  /// With `wait`, blocks while the queue is full instead of dropping (offline data).
+  void Submit(scene::RgbdSample frame, const scene::CameraInfo& camera, bool wait = false);
+  /// Integrates what is queued, writes a last version when frames were integrated since the
+  /// previous one, and ends the thread. Idempotent.
+  void Stop();
+  Stats GetStats() const;
+  const std::string& VersionsDir() const { return versions_dir_; }
+
+ private:
+  struct Job {
+    scene::RgbdSample frame;
+    scene::CameraInfo camera;
+  };
+  void Run();
+  void Integrate(const Job& job);
+  void Publish();
+  void Prune();
+
+  FusionMapperOptions options_;
+  VersionCallback on_version_;
+  std::string versions_dir_;
+  std::string keyframes_dir_;
+  uint64_t next_version_ = 1;
+
+  mutable std::mutex mutex_;
+  std::condition_variable cv_;
+  std::deque<Job> queue_;
+  bool stopping_ = false;
+  Stats stats_;
+
+  // Mapping thread only.
+  std::unique_ptr<fusion::FusionScene> scene_;
+  std::unique_ptr<scene::CaptureWriter> keyframes_;
+  uint64_t unpublished_ = 0;
+  std::thread thread_;
+};
+
+}  // namespace p2i::trainer
