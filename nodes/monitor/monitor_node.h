@@ -27,8 +27,9 @@ namespace p2i::nodes {
 /// view's size: the same path the training frames take.
 ///
 /// Beside the served views it scores the two free baselines on the same poses (PSNR, SSIM), so
-/// the summary shows what P2I-NET has to beat: the nearest keyframe and the depth warp of the
-/// frames captured so far (KeyframeBaselines).
+/// the summary shows what a method has to beat: the nearest keyframe and the depth warp of the
+/// frames captured so far (KeyframeBaselines). Views of a second method on "compare_views" (the
+/// demo's P2I-NET beside its default fusion) are scored the same way and printed beside them.
 /// Parameters: MonitorOptions (monitor_options.h).
 /// Thread-compatible: everything runs on the node's executor thread.
 class MonitorNode : public runtime::Node {
@@ -39,7 +40,17 @@ class MonitorNode : public runtime::Node {
   void OnShutdown() override;
 
  private:
+  /// Image scores of one view's set (the served views, or the compared method's).
+  struct ViewScores {
+    std::string method;  ///< ViewMeta.method of the last view scored
+    uint64_t scored = 0;
+    std::vector<double> psnr, ssim, lpips, depth_absrel, observed_fraction;
+  };
   void OnView(const msgs::View& view);
+  void OnCompareView(const msgs::View& view);
+  /// Scores `view` against the sim ground truth at its pose into `scores`; returns the truth
+  /// (at the view's size).
+  scene::RgbdSample Score(const msgs::View& view, ViewScores* scores);
   void Finish();
   std::string SummaryText() const;
 
@@ -56,11 +67,14 @@ class MonitorNode : public runtime::Node {
   uint64_t views_scored_ = 0;
   std::set<uint64_t> versions_published_;
   std::set<uint64_t> versions_served_;
-  std::vector<double> psnr_, ssim_, lpips_values_, depth_absrel_, latency_ms_, render_ms_;
+  ViewScores served_;   ///< the views on "views"
+  ViewScores compare_;  ///< the views on "compare_views" (another method on the same poses)
+  uint64_t compare_received_ = 0;
+  std::vector<double> latency_ms_, render_ms_;
   std::vector<double> coverage_;
   std::optional<KeyframeBaselines> baselines_;  ///< after sim_ (points to it)
   std::vector<double> nearest_psnr_, nearest_ssim_, warp_psnr_, warp_ssim_;
-  std::shared_ptr<runtime::RawSubscriber> views_sub_, frames_sub_, versions_sub_;
+  std::shared_ptr<runtime::RawSubscriber> views_sub_, compare_sub_, frames_sub_, versions_sub_;
 };
 
 }  // namespace p2i::nodes
