@@ -315,8 +315,18 @@ void ReadStability(const Reader& r, const YAML::Node& root, BenchConfig& c) {
 void ReadAutoSize(const Reader& r, const YAML::Node& root, BenchConfig& c) {
   if (root["auto_size"]) {
     const YAML::Node a = root["auto_size"];
-    r.CheckKeys(a, {"method", "setting", "margin_db"}, "auto_size");
+    r.CheckKeys(a, {"method", "methods", "setting", "margin_db"}, "auto_size");
     if (a["method"]) c.auto_size.method = r.String(a["method"], "auto_size.method");
+    if (a["methods"]) {
+      if (!a["methods"].IsSequence() || a["methods"].size() < 2)
+        r.Fail(a["methods"], "auto_size.methods must be a list of at least two method names");
+      for (const auto& m : a["methods"]) {
+        const std::string name = r.String(m, "auto_size.methods");
+        if (!c.FindMethod(name))
+          r.Fail(m, "auto_size.methods: '" + name + "' is not in methods");
+        c.auto_size.methods.push_back(name);
+      }
+    }
     if (a["margin_db"]) c.auto_size.margin_db = r.Double(a["margin_db"], "auto_size.margin_db");
     if (c.auto_size.margin_db < 0) r.Fail(a, "auto_size.margin_db must be >= 0");
   }

@@ -87,7 +87,11 @@ struct StabilitySpec {
 };
 
 struct AutoSizeSpec {
-  std::string method;     ///< default: the first learned method
+  std::string method;     ///< the size ladder of this method; default: the first learned method
+  /// Across methods: at each size, the cheapest of these methods within the margin of their best
+  /// PSNR (e.g. warp, fusion variants with other voxel sizes or refinement nets, p2i). Empty =
+  /// no choice across methods.
+  std::vector<std::string> methods;
   scene::EvalSetting setting;  ///< default: the first setting
   double margin_db = 0.5;
 };

@@ -718,19 +718,68 @@ std::optional<LadderChoice> ChooseOnLadder(const BenchConfig& c, const std::vect
   return out;
 }
 
+std::vector<LadderChoice> ChooseAcrossMethods(const BenchConfig& c,
+                                              const std::vector<ResultRow>& rows, double margin_db) {
+  std::vector<LadderChoice> out;
+  if (c.auto_size.methods.empty()) return out;
+  const std::string setting = c.auto_size.setting.Name();
+  for (const auto& s : c.sizes) {
+    LadderChoice l;
+    for (const std::string& method : c.auto_size.methods) {
+      SizeCandidate k;
+      k.name = method;
+      k.psnr_db = MeanOver(rows, method, setting, s.name, "psnr");
+      if (!std::isfinite(k.psnr_db)) continue;  // not run at this size (learned, non-square)
+      k.params = MeanOver(rows, method, setting, s.name, "params");
+      k.flops = MeanOver(rows, method, setting, s.name, "flops");
+      k.views_per_s = MeanOver(rows, method, setting, s.name, "views_per_s");
+      l.candidates.push_back(k);
+    }
+    if (l.candidates.size() < 2) continue;
+    l.choice = ChooseAutoSize(l.candidates, margin_db, "method");
+    std::ostringstream os;
+    os << "Across methods at size `" << s.name << "` (" << s.Width() << "x" << s.Height()
+       << ") on setting " << setting << " (margin " << Fixed(margin_db)
+       << " dB PSNR):\n\n| method | PSNR dB | params | GFLOP/view | views/s |\n|---|---|---|---|---|\n";
+    for (size_t i = 0; i < l.candidates.size(); ++i) {
+      const SizeCandidate& k = l.candidates[i];
+      os << "| " << (int(i) == l.choice.index ? "**" + k.name + "**" : k.name) << " | "
+         << Fixed(k.psnr_db) << " | " << Fixed(k.params / 1e6, 3) << " M | "
+         << Fixed(k.flops / 1e9, 3) << " | " << Fixed(k.views_per_s, 1) << " |\n";
+    }
+    os << "\n--auto-size: " << l.choice.reason;
+    l.markdown = os.str();
+    out.push_back(std::move(l));
+  }
+  return out;
+}
+
 void AutoSizeStage(BenchRun& run) {
   const BenchConfig& c = run.config;
   const std::optional<LadderChoice> ladder = ChooseOnLadder(c, run.store.rows(), run.margin_db);
-  if (!ladder) {
+  const std::vector<LadderChoice> across = ChooseAcrossMethods(c, run.store.rows(), run.margin_db);
+  if (!ladder && across.empty()) {
     if (run.options.auto_size)
-      std::printf("auto-size: needs at least 2 sizes and a learned method in the config\n");
+      std::printf("auto-size: needs at least 2 sizes and a learned method, or auto_size.methods "
+                  "with 2 measured methods, in the config\n");
     return;
   }
-  run.auto_size.push_back(ladder->markdown);
-  scene::WriteFileAtomic(run.out_dir + "/auto_size.txt", ladder->choice.reason + "\n");
-  if (run.options.auto_size)
-    std::printf("auto-size (%s, setting %s): %s\n", c.auto_size.method.c_str(),
-                c.auto_size.setting.Name().c_str(), ladder->choice.reason.c_str());
+  std::string text;
+  if (ladder) {
+    run.auto_size.push_back(ladder->markdown);
+    text += ladder->choice.reason + "\n";
+    if (run.options.auto_size)
+      std::printf("auto-size (%s, setting %s): %s\n", c.auto_size.method.c_str(),
+                  c.auto_size.setting.Name().c_str(), ladder->choice.reason.c_str());
+  }
+  for (const LadderChoice& l : across) {
+    run.auto_size.push_back(l.markdown);
+    text += l.choice.reason + "\n";
+    if (run.options.auto_size)
+      std::printf("auto-size across methods (setting %s): %s\n",
+                  c.auto_size.setting.Name().c_str(), l.choice.reason.c_str());
+  }
+  scene::WriteFileAtomic(run.out_dir + "/auto_size.txt", text);
 }
 
 ReportInputs MakeReportInputs(const BenchRun& run) {

@@ -78,8 +78,13 @@ struct LadderChoice {
 };
 std::optional<LadderChoice> ChooseOnLadder(const BenchConfig& config,
                                            const std::vector<ResultRow>& rows, double margin_db);
-/// Runs ChooseOnLadder on the run's rows: run.auto_size, OUT/auto_size.txt, and the printed
-/// choice with --auto-size.
+/// Across methods (config auto_size.methods): at each size where at least two of the methods
+/// were measured on the auto-size setting, the cheapest within the margin of their best
+/// (ChooseAutoSize with noun "method"). One LadderChoice per such size, config order.
+std::vector<LadderChoice> ChooseAcrossMethods(const BenchConfig& config,
+                                              const std::vector<ResultRow>& rows, double margin_db);
+/// Runs ChooseOnLadder and ChooseAcrossMethods on the run's rows: run.auto_size, OUT/auto_size.txt,
+/// and the printed choices with --auto-size.
 void AutoSizeStage(BenchRun& run);
 
 /// Report: the report's inputs from the run (command, data, machine, LPIPS, charts, strips,

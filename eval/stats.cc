@@ -101,7 +101,19 @@ std::vector<size_t> ParetoFront(const std::vector<ParetoPoint>& points, bool max
   return front;
 }
 
-AutoSizeChoice ChooseAutoSize(const std::vector<SizeCandidate>& c, double margin_db) {
+namespace {
+
+/// Fewer parameters, then fewer FLOPs, then more views/s.
+bool Cheaper(const SizeCandidate& a, const SizeCandidate& b) {
+  if (a.params != b.params) return a.params < b.params;
+  if (a.flops != b.flops) return a.flops < b.flops;
+  return a.views_per_s > b.views_per_s;
+}
+
+}  // namespace
+
+AutoSizeChoice ChooseAutoSize(const std::vector<SizeCandidate>& c, double margin_db,
+                              const std::string& noun) {
   if (!std::isfinite(margin_db) || margin_db < 0.0)
     throw std::invalid_argument("auto-size margin must be a finite number >= 0 dB");
   AutoSizeChoice out;
@@ -110,23 +122,18 @@ AutoSizeChoice ChooseAutoSize(const std::vector<SizeCandidate>& c, double margin
     if (out.best_index < 0 || c[i].psnr_db > c[out.best_index].psnr_db) out.best_index = int(i);
   }
   if (out.best_index < 0) {
-    out.reason = "no size of the ladder has a measured PSNR: nothing to choose";
+    out.reason = "no " + noun + " of the ladder has a measured PSNR: nothing to choose";
     return out;
   }
   out.best_psnr_db = c[out.best_index].psnr_db;
   const double floor_db = out.best_psnr_db - margin_db;
   for (size_t i = 0; i < c.size(); ++i) {
     if (!std::isfinite(c[i].psnr_db) || c[i].psnr_db < floor_db) continue;
-    if (out.index < 0) {
-      out.index = int(i);
-      continue;
-    }
-    const auto& a = c[i];
-    const auto& b = c[out.index];
-    if (a.params < b.params || (a.params == b.params && a.flops < b.flops)) out.index = int(i);
+    if (out.index < 0 || Cheaper(c[i], c[out.index])) out.index = int(i);
   }
   const auto& pick = c[out.index];
   const auto& best = c[out.best_index];
+  const std::string cheapest = "the cheapest (fewest parameters, then FLOPs, then most views/s) of the " + noun + "s within";
   std::string r = "picked '" + pick.name + "' (" + Fmt("%.3g M params, %.3g GFLOP/view, ", pick.params / 1e6, pick.flops / 1e9) +
                   Fmt("%.2f dB PSNR, %.1f views/s)", pick.psnr_db, pick.views_per_s) + ": ";
   std::string within;
@@ -134,21 +141,21 @@ AutoSizeChoice ChooseAutoSize(const std::vector<SizeCandidate>& c, double margin
     if (std::isfinite(c[i].psnr_db) && c[i].psnr_db >= floor_db)
       within += (within.empty() ? "'" : ", '") + c[i].name + "'";
   if (out.index == out.best_index) {
-    r += "it has the best PSNR of the ladder and is the smallest of the sizes within " +
+    r += "it has the best PSNR of the ladder and is " + cheapest + " " +
          Fmt("%.2f dB of it (", margin_db) + within + ")";
   } else {
     r += "the best is '" + best.name + "' at " + Fmt("%.2f dB", best.psnr_db) + " (" +
-         Fmt("%.3g M params", best.params / 1e6) + "); '" + pick.name + "' is " +
-         Fmt("%.2f dB below it, within the %.2f dB margin, and the smallest of the sizes within it (", best.psnr_db - pick.psnr_db, margin_db) + within + ")";
+         Fmt("%.3g M params, %.1f views/s", best.params / 1e6, best.views_per_s) + "); '" + pick.name + "' is " +
+         Fmt("%.2f dB below it, within the %.2f dB margin, and ", best.psnr_db - pick.psnr_db, margin_db) + cheapest + " it (" + within + ")";
   }
-  std::string smaller;
+  std::string cheaper;
   for (size_t i = 0; i < c.size(); ++i) {
     if (int(i) == out.index || !std::isfinite(c[i].psnr_db)) continue;
-    if (c[i].params < pick.params || (c[i].params == pick.params && c[i].flops < pick.flops))
-      smaller += (smaller.empty() ? "" : ", ") + ("'" + c[i].name + "' ") +
+    if (Cheaper(c[i], pick))
+      cheaper += (cheaper.empty() ? "" : ", ") + ("'" + c[i].name + "' ") +
                  Fmt("%.2f dB (%.2f dB below the best)", c[i].psnr_db, best.psnr_db - c[i].psnr_db);
   }
-  if (!smaller.empty()) r += "; smaller sizes fall outside the margin: " + smaller;
+  if (!cheaper.empty()) r += "; cheaper " + noun + "s fall outside the margin: " + cheaper;
   out.reason = r + ".";
   return out;
 }

@@ -50,8 +50,10 @@ struct SizeCandidate {
   double views_per_s = 0.0;
 };
 
-/// The --auto-size choice: the smallest candidate (fewest parameters, then fewest FLOPs, then
-/// ladder order) whose PSNR is within `margin_db` of the best PSNR of the ladder.
+/// The --auto-size choice: the cheapest candidate (fewest parameters, then fewest FLOPs, then
+/// most views/s, then ladder order) whose PSNR is within `margin_db` of the best PSNR of the
+/// ladder. Methods without a network (warp, the fusion blend) have 0 parameters and FLOPs, so
+/// among them the faster one is cheaper.
 struct AutoSizeChoice {
   int index = -1;        ///< into the candidates; -1 when none has a finite PSNR
   int best_index = -1;   ///< the candidate with the best PSNR
@@ -59,7 +61,9 @@ struct AutoSizeChoice {
   std::string reason;    ///< one paragraph saying why (printed by `p2i bench --auto-size`)
 };
 /// Throws std::invalid_argument for a negative or non-finite margin.
-AutoSizeChoice ChooseAutoSize(const std::vector<SizeCandidate>& candidates, double margin_db);
+/// `noun` names the candidates in the reason ("size" on a size ladder, "method" across methods).
+AutoSizeChoice ChooseAutoSize(const std::vector<SizeCandidate>& candidates, double margin_db,
+                              const std::string& noun = "size");
 
 /// The first sweep distance at which `quality` falls below `threshold` (distances ascending,
 /// quality[i] measured at distances[i]); NaN when it never does. Non-finite qualities are

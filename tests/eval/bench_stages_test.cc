@@ -103,6 +103,53 @@ TEST_CASE("bench auto-size stage: the smallest size within the margin of the bes
         ChooseOnLadder(c, LadderRows(), 0.5)->choice.reason + "\n");
 }
 
+TEST_CASE("bench auto-size stage across methods: the cheapest method within the margin",
+          "[unit]") {
+  std::string text = kLadder;
+  text.replace(text.find("  - nearest\n"), 12, "  - nearest\n  - warp\n");
+  text += "auto_size: {setting: b, methods: [nearest, warp, p2i]}\n";
+  const BenchConfig c = BenchConfig::FromYamlString(text, "across.yaml");
+  REQUIRE(c.auto_size.methods == std::vector<std::string>{"nearest", "warp", "p2i"});
+  std::vector<ResultRow> rows = LadderRows();
+  ResultRow warp = Row("warp", "b", "tiny", 1, 25.0, 0);
+  warp.views_per_s = 400;
+  rows.push_back(warp);  // nearest b tiny: 25.0 dB too in LadderRows, at 1e7 views/s
+
+  // At tiny: nearest, warp (both 25.0 dB, no parameters) and p2i (20.1). At small only p2i ran.
+  std::vector<LadderChoice> across = ChooseAcrossMethods(c, rows, 0.5);
+  REQUIRE(across.size() == 1);
+  REQUIRE(across[0].candidates.size() == 3);
+  CHECK(across[0].candidates[across[0].choice.index].name == "nearest");  // faster at equal PSNR
+  CHECK(across[0].markdown.find("Across methods at size `tiny` (32x32) on setting b") !=
+        std::string::npos);
+  CHECK(across[0].markdown.find("| **nearest** | 25.00 |") != std::string::npos);
+  CHECK(across[0].choice.reason.find("of the methods within") != std::string::npos);
+  rows[5].psnr = 24.0;  // nearest now 1 dB below warp: outside 0.5 dB
+  across = ChooseAcrossMethods(c, rows, 0.5);
+  CHECK(across[0].candidates[across[0].choice.index].name == "warp");
+  CHECK(across[0].choice.reason.find("cheaper methods fall outside the margin: 'nearest'") !=
+        std::string::npos);
+
+  // The stage writes the size ladder's paragraph and this one.
+  p2i::testing::TempDir dir("bench_stages_across");
+  BenchRun run(BenchOptions{}, c, dir.path());
+  run.margin_db = 0.5;
+  for (const auto& r : rows) run.store.Add(r);
+  AutoSizeStage(run);
+  REQUIRE(run.auto_size.size() == 2);
+  CHECK(run.auto_size[1] == across[0].markdown);
+  CHECK(p2i::testing::ReadFile(dir / "auto_size.txt") ==
+        ChooseOnLadder(c, rows, 0.5)->choice.reason + "\n" + across[0].choice.reason + "\n");
+
+  // Refusals name the key.
+  std::string bad = kLadder + "auto_size: {methods: [nearest, gan]}\n";
+  CHECK_THROWS_WITH(BenchConfig::FromYamlString(bad, "bad.yaml"),
+                    Catch::Contains("auto_size.methods: 'gan' is not in methods"));
+  bad = kLadder + "auto_size: {methods: [nearest]}\n";
+  CHECK_THROWS_WITH(BenchConfig::FromYamlString(bad, "bad.yaml"),
+                    Catch::Contains("at least two"));
+}
+
 TEST_CASE("bench report stage: report.md from fixed rows, without a measurement", "[unit]") {
   p2i::testing::TempDir dir("bench_stages_report");
   BenchOptions o;

@@ -79,3 +79,18 @@ TEST_CASE("ChooseAutoSize picks the smallest size within the margin of the best"
   CHECK(ChooseAutoSize({{"x", NAN, 1, 1, 1}}, 0.5).index == -1);
   CHECK_THROWS_AS(ChooseAutoSize(ladder, -1), std::invalid_argument);
 }
+
+TEST_CASE("ChooseAutoSize across methods: without networks the faster one is cheaper", "[unit]") {
+  // warp and the fusion blend have no parameters; the refined fusion is best but has a net.
+  const std::vector<SizeCandidate> methods = {{"fusion_refined", 25.9, 2e5, 3e8, 30},
+                                              {"fusion", 25.7, 0, 0, 40},
+                                              {"warp", 25.5, 0, 0, 450},
+                                              {"nearest", 19.0, 0, 0, 40000}};
+  AutoSizeChoice c = ChooseAutoSize(methods, 0.5, "method");
+  CHECK(c.index == 2);  // warp: within 0.4 dB, as cheap as fusion in parameters, 11x faster
+  CHECK(c.best_index == 0);
+  CHECK(c.reason.find("of the methods within") != std::string::npos);
+  CHECK(c.reason.find("'nearest' 19.00 dB") != std::string::npos);  // cheaper, outside
+  CHECK(ChooseAutoSize(methods, 0.3, "method").index == 1);  // warp out: the blend
+  CHECK(ChooseAutoSize(methods, 0.1, "method").index == 0);  // only the refined one
+}
