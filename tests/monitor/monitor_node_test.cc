@@ -59,16 +59,19 @@ TEST_CASE("MonitorNode: served and compared views beside the baselines in summar
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
   size_t i = 0;
   while (!std::filesystem::exists(summary) && std::chrono::steady_clock::now() < deadline) {
-    const scene::Pose pose = sweep[(7 * i) % sweep.size()].pose;
+    // A captured keyframe at pose i; the views are at the pose of the loop before, so they
+    // arrive after their keyframe (another socket) and the nearest keyframe is exact.
+    msgs::RgbdFrame f;
+    convert::ToMsg(sweep[(7 * i) % sweep.size()].pose, f.meta.mutable_pose());
+    convert::ToMsg(scene::CenterCropResizeCamera(cam, 32, 32), f.meta.mutable_camera_info());
+    f.rgb = convert::ToImage(cv::Mat(32, 32, CV_8UC3, cv::Scalar(0, 0, 0)));
+    f.depth = convert::ToImage(cv::Mat(32, 32, CV_32FC1, cv::Scalar(1.0f)));
+    frames->Publish(f);
+    if (i++ == 0) continue;
+    const scene::Pose pose = sweep[(7 * (i - 2)) % sweep.size()].pose;
     // Served: the exact view (what a perfect method renders), with an observed fraction.
     scene::RgbdSample exact = scene::CenterCropResizeSample(sim.Render(pose, cam), 32, 32);
     exact.pose = pose;
-    msgs::RgbdFrame f;  // a captured keyframe at the same pose: the baselines need one
-    convert::ToMsg(pose, f.meta.mutable_pose());
-    convert::ToMsg(scene::CenterCropResizeCamera(cam, 32, 32), f.meta.mutable_camera_info());
-    f.rgb = convert::ToImage(exact.rgb);
-    f.depth = convert::ToImage(exact.depth);
-    frames->Publish(f);
     msgs::View served = MakeView(exact, "fusion");
     served.meta.set_observed_fraction(0.75);
     views->Publish(served);
@@ -77,7 +80,6 @@ TEST_CASE("MonitorNode: served and compared views beside the baselines in summar
     grey.rgb = cv::Mat(32, 32, CV_8UC3, cv::Scalar(128, 128, 128));
     grey.depth = cv::Mat(32, 32, CV_32FC1, cv::Scalar(2.0f));
     compare->Publish(MakeView(grey, "p2i"));
-    ++i;
     for (int k = 0; k < 10; ++k) {
       graph.SpinOnce(std::chrono::milliseconds(1));
       monitor.SpinOnce(std::chrono::milliseconds(5));
