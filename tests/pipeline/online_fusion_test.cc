@@ -18,7 +18,7 @@ namespace {
 
 using namespace std::chrono_literals;
 using testing::LaunchedGraph;
-using RenderClient = runtime::ServiceClient<msgs::pb::RenderRequest, msgs::RenderReplyMsg>;
+using testing::RenderClient;
 
 }  // namespace
 

@@ -20,6 +20,7 @@
 
 #include "msgs/codec.h"
 #include "nodes/runtime/raw_subscriber.h"
+#include "nodes/runtime/service_client.h"
 #include "tests/process_util.h"
 #include "tests/read_file.h"
 #include "tests/runtime/test_util.h"
@@ -28,6 +29,8 @@
 namespace p2i::pipeline::testing {
 
 using Clock = std::chrono::steady_clock;
+/// A client of the graph's render service (the synthesizer's, or the pool's).
+using RenderClient = runtime::ServiceClient<msgs::pb::RenderRequest, msgs::RenderReplyMsg>;
 
 /// A launch file started through `p2i launch` in a private run dir (also exported as
 /// P2I_RUN_DIR to this process, so the test's clients and publishers find the graph's ipc

@@ -26,7 +26,7 @@ using namespace std::chrono_literals;
 using testing::Clock;
 using testing::LaunchedGraph;
 
-using RenderClient = runtime::ServiceClient<msgs::pb::RenderRequest, msgs::RenderReplyMsg>;
+using testing::RenderClient;
 
 msgs::pb::RenderRequest Request(const std::vector<scene::StampedPose>& sweep, size_t i, int n) {
   msgs::pb::RenderRequest r;
