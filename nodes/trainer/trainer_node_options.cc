@@ -39,7 +39,7 @@ void DeclareLoop(runtime::Parameters& p, TrainingLoop::Options* o) {
 void DeclareMapper(runtime::Parameters& p, FusionMapperOptions* o) {
   const YAML::Node scene = p.Declare<YAML::Node>(
       "fusion_options", YAML::Node(),
-      "method fusion: {tsdf: {...}, blend: {...}} as for the fusion method (docs/FUSION.md)");
+      "method fusion: {tsdf: {...}, blend: {...}} as for the fusion method (fusion/tsdf_volume.h, fusion/fusion_scene.h)");
   if (scene.IsDefined() && !scene.IsNull()) {
     // A launch file's quoted "{tsdf: ...}" arrives as a string; a command line's as a map.
     const YAML::Node map = scene.IsScalar() ? YAML::Load(scene.as<std::string>()) : scene;
