@@ -1,8 +1,9 @@
 /// @file fusion_bench.cc
 /// @brief Speed and memory of the `fusion` method (issue 12's speed targets): TSDF integration
-/// time per camera frame (against a 30 Hz camera's 33.3 ms), render time per view at 128x128 and
-/// 320x240 with the hit refinement on and off and with the learned refinement, and the fused
-/// scene's memory per m^3 of allocated blocks. The method is built through the method registry,
+/// time per camera frame (against a 30 Hz camera's 33.3 ms) with blocks of 16^3 (the default) and
+/// 8^3 voxels, render time per view at 128x128 and 320x240 with the hit refinement on and off,
+/// with 8^3 blocks and with the learned refinement, and the fused scene's memory per m^3 of
+/// allocated blocks. The method is built through the method registry,
 /// as `p2i bench` and the synthesizer build it; transport is not included (pipeline_bench has
 /// it). Prints a table and writes JSON.
 ///
@@ -87,8 +88,10 @@ void MakeData(const Args& a, p2i::scene::RgbdDataset* train, std::vector<p2i::sc
 
 /// Median integration time of each training frame into a fresh TSDF (default options: 2 cm), and
 /// the volume's memory afterwards.
-nlohmann::json BenchIntegration(const p2i::scene::RgbdDataset& train) {
-  p2i::fusion::TsdfVolume tsdf;
+nlohmann::json BenchIntegration(const p2i::scene::RgbdDataset& train, int block_resolution) {
+  p2i::fusion::TsdfOptions options;
+  options.block_resolution = block_resolution;
+  p2i::fusion::TsdfVolume tsdf(options);
   std::vector<double> ms;
   for (const auto& f : train.frames) {
     const auto t0 = Clock::now();
@@ -100,6 +103,7 @@ nlohmann::json BenchIntegration(const p2i::scene::RgbdDataset& train) {
   const bool keeps_up = p50 < 1000.0 / 30.0;
   nlohmann::json j;
   j["frame_size"] = std::to_string(train.camera.image_width) + "x" + std::to_string(train.camera.image_height);
+  j["block_resolution"] = block_resolution;
   j["frames"] = train.frames.size();
   j["integrate_ms_p50"] = p50;
   j["keeps_up_with_30hz"] = keeps_up;
@@ -107,8 +111,9 @@ nlohmann::json BenchIntegration(const p2i::scene::RgbdDataset& train) {
   j["memory_mb"] = s.memory_bytes / 1e6;
   j["block_volume_m3"] = s.block_volume_m3;
   j["memory_mb_per_m3"] = s.block_volume_m3 > 0 ? s.memory_bytes / 1e6 / s.block_volume_m3 : 0.0;
-  std::printf("integration (%s, %zu frames): p50 %.1f ms/frame (30 Hz budget 33.3 ms: %s)\n",
-              j["frame_size"].get<std::string>().c_str(), train.frames.size(), p50,
+  std::printf("integration (%s, %zu frames, blocks of %d^3 voxels): p50 %.1f ms/frame (30 Hz "
+              "budget 33.3 ms: %s)\n",
+              j["frame_size"].get<std::string>().c_str(), train.frames.size(), block_resolution, p50,
               keeps_up ? "keeps up" : "falls behind");
   std::printf("memory: %lld blocks, %.1f MB over %.2f m^3 of blocks = %.1f MB per m^3\n",
               static_cast<long long>(s.blocks), s.memory_bytes / 1e6, s.block_volume_m3,
@@ -171,10 +176,13 @@ int main(int argc, char** argv) {
     nlohmann::json out;
     out["scene"] = a.scene;
     out["omp_num_threads"] = omp ? omp : "";
-    out["integration"] = BenchIntegration(train);
+    out["integration"] = BenchIntegration(train, 16);  // TsdfOptions' default
+    out["integration_block8"] = BenchIntegration(train, 8);
     std::printf("%-22s %9s %9s %9s %10s %9s\n", "row", "size", "p50_ms", "views/s", "build_ms", "observed");
     struct Row { std::string label, options; };
-    std::vector<Row> rows = {{"blend", "{}"}, {"blend_no_refine_hits", "{tsdf: {refine_hits: false}}"}};
+    std::vector<Row> rows = {{"blend", "{}"},
+                             {"blend_no_refine_hits", "{tsdf: {refine_hits: false}}"},
+                             {"blend_block8", "{tsdf: {block_resolution: 8}}"}};
     if (!a.net.empty()) rows.push_back({"refined (zero-shot)", "{refine: {net: '" + a.net + "'}}"});
     for (const auto& size : {std::make_pair(128, 128), std::make_pair(320, 240)})
       for (const Row& r : rows)
