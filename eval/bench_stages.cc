@@ -725,6 +725,7 @@ std::vector<LadderChoice> ChooseAcrossMethods(const BenchConfig& c,
   const std::string setting = c.auto_size.setting.Name();
   for (const auto& s : c.sizes) {
     LadderChoice l;
+    l.size = s.name;
     for (const std::string& method : c.auto_size.methods) {
       SizeCandidate k;
       k.name = method;
@@ -776,7 +777,7 @@ void AutoSizeStage(BenchRun& run) {
     run.auto_size.push_back(l.markdown);
     text += l.choice.reason + "\n";
     if (run.options.auto_size)
-      std::printf("auto-size across methods (setting %s): %s\n",
+      std::printf("auto-size across methods (size %s, setting %s): %s\n", l.size.c_str(),
                   c.auto_size.setting.Name().c_str(), l.choice.reason.c_str());
   }
   scene::WriteFileAtomic(run.out_dir + "/auto_size.txt", text);

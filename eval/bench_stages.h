@@ -75,6 +75,7 @@ struct LadderChoice {
   std::vector<SizeCandidate> candidates;  ///< one per size, config order
   AutoSizeChoice choice;
   std::string markdown;  ///< the report's ladder table and the choice
+  std::string size;      ///< across methods: the size the candidates ran at
 };
 std::optional<LadderChoice> ChooseOnLadder(const BenchConfig& config,
                                            const std::vector<ResultRow>& rows, double margin_db);

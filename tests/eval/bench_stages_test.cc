@@ -119,6 +119,7 @@ TEST_CASE("bench auto-size stage across methods: the cheapest method within the 
   std::vector<LadderChoice> across = ChooseAcrossMethods(c, rows, 0.5);
   REQUIRE(across.size() == 1);
   REQUIRE(across[0].candidates.size() == 3);
+  CHECK(across[0].size == "tiny");
   CHECK(across[0].candidates[across[0].choice.index].name == "nearest");  // faster at equal PSNR
   CHECK(across[0].markdown.find("Across methods at size `tiny` (32x32) on setting b") !=
         std::string::npos);
