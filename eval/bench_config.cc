@@ -115,7 +115,7 @@ void ReadDataset(const Reader& r, const YAML::Node& root, const std::string& con
                  BenchConfig& c) {
   const YAML::Node ds = r.Require(root, "dataset", "the bench config");
   r.CheckKeys(ds,
-              {"scene", "path", "format", "seven_scenes_invalid_depth", "trajectories",
+              {"scene", "path", "format", "seven_scenes_invalid_depth", "sequences", "trajectories",
                "trajectory_offset", "heights", "speed", "max_frames", "frame_step", "render_size",
                "sensor", "specular"},
               "dataset");
@@ -132,6 +132,13 @@ void ReadDataset(const Reader& r, const YAML::Node& root, const std::string& con
   if (ds["seven_scenes_invalid_depth"])
     d.seven_scenes_invalid_depth =
         Int(r, ds["seven_scenes_invalid_depth"], "dataset.seven_scenes_invalid_depth", 0);
+  if (ds["sequences"]) {
+    if (d.path.empty()) r.Fail(ds["sequences"], "dataset.sequences needs dataset.path");
+    const YAML::Node seqs = ds["sequences"];
+    if (!seqs.IsSequence() || seqs.size() == 0)
+      r.Fail(seqs, "dataset.sequences must be a non-empty list of sequence names, e.g. [seq-01]");
+    for (const auto& s : seqs) d.sequences.push_back(r.String(s, "dataset.sequences"));
+  }
   if (ds["trajectories"]) d.trajectories = Int(r, ds["trajectories"], "dataset.trajectories", 1);
   if (ds["trajectory_offset"])
     d.trajectory_offset = r.Double(ds["trajectory_offset"], "dataset.trajectory_offset");

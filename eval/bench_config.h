@@ -22,6 +22,9 @@ struct DatasetSpec {
   std::string path;
   std::string format = "auto";
   int seven_scenes_invalid_depth = 65535;
+  /// path: the sequences kept, by name (e.g. {"seq-01"}; empty = all). A name the folder does
+  /// not hold is an error listing the names it does.
+  std::vector<std::string> sequences;
   int trajectories = 3;             ///< scene: number of adjacent arm sweeps
   double trajectory_offset = 0.1;   ///< scene: metres between neighbouring sweeps (radial)
   std::vector<double> heights = {1.0, 1.3, 1.6};  ///< scene: arm sweep heights (m)

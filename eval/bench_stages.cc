@@ -141,9 +141,21 @@ void ReadFolderData(const BenchConfig& c, Data* data) {
   o.format = d.format;
   o.seven_scenes_invalid_depth = d.seven_scenes_invalid_depth;
   const scene::DatasetIndex all = scene::OpenDataset(d.path, o);
+  const auto names = all.Sequences();
+  for (const std::string& s : d.sequences) {
+    if (std::find(names.begin(), names.end(), s) == names.end()) {
+      std::string list;
+      for (const auto& n : names) list += (list.empty() ? "" : ", ") + n;
+      throw std::runtime_error("dataset.sequences names '" + s + "' but '" + d.path +
+                               "' holds only: " + list);
+    }
+  }
   std::vector<scene::FrameRef> frames;
   std::map<std::string, int> seen, kept;
   for (const auto& f : all.frames()) {
+    if (!d.sequences.empty() &&
+        std::find(d.sequences.begin(), d.sequences.end(), f.sequence) == d.sequences.end())
+      continue;
     const int i = seen[f.sequence]++;
     if (i % d.frame_step != 0) continue;
     if (d.max_frames > 0 && kept[f.sequence] >= d.max_frames) continue;

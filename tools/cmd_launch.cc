@@ -206,6 +206,14 @@ std::string PrepareRunDir(const Options& o, bool* own) {
   return run_dir;
 }
 
+// The nodes' OpenMP threads sleep when they wait (libgomp reads OMP_WAIT_POLICY once, when it
+// loads, so only the parent can set it). With the default (spin, then sleep) a 2-thread trainer
+// beside other busy processes was 2-10x slower than 1 thread; passive was as fast as 1 thread or
+// faster (docs/MODEL.md "Benchmark", issue 11 point 2). A value the user exported is kept.
+void SetThreadingDefaults() {
+  if (std::getenv("OMP_WAIT_POLICY") == nullptr) ::setenv("OMP_WAIT_POLICY", "PASSIVE", 0);
+}
+
 // Multi-host files: this host's registry, and the environment the nodes find their peers by.
 std::unique_ptr<runtime::RegistryServer> StartRegistry(const MachinePlan& plan) {
   if (!plan.multi_host) return nullptr;
@@ -285,6 +293,7 @@ int RunLaunch(const std::vector<std::string>& args) {
   }
   bool own_run_dir = false;
   const std::string run_dir = PrepareRunDir(o, &own_run_dir);
+  SetThreadingDefaults();
   const std::unique_ptr<runtime::RegistryServer> registry_server = StartRegistry(plan);
   return RunProcesses(std::move(processes.specs), o, params_dir, run_dir, own_run_dir);
 }

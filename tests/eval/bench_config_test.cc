@@ -136,6 +136,11 @@ sizes: [64]
             .find("period") != std::string::npos);
   CHECK(ErrorOf("dataset: {scene: x, path: y}\nsettings: [a1]\nmethods: [nearest]\nsizes: [64]\n")
             .find("exactly one") != std::string::npos);
+  // dataset.sequences picks sequences of a folder: not of a sim scene, never an empty list.
+  CHECK(ErrorOf("dataset: {scene: x, sequences: [seq-01]}\nsettings: [a1]\nmethods: [nearest]\nsizes: [64]\n")
+            .find("dataset.sequences needs dataset.path") != std::string::npos);
+  CHECK(ErrorOf("dataset: {path: y, sequences: []}\nsettings: [a1]\nmethods: [nearest]\nsizes: [64]\n")
+            .find("non-empty list") != std::string::npos);
 }
 
 TEST_CASE("Bench config: the shipped sim configs render with the sensor model, exact on request",

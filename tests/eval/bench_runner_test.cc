@@ -11,6 +11,8 @@
 #include <catch2/catch.hpp>
 
 #include "eval/bench_runner.h"
+#include "tests/skip.h"
+#include "tests/test_paths.h"
 
 namespace fs = std::filesystem;
 
@@ -43,5 +45,40 @@ TEST_CASE("p2i bench: a setting the data cannot run fails before the first row",
   // No row was measured (a1 comes first in the config).
   CHECK_FALSE(fs::exists(dir / "out" / "results.csv"));
   CHECK_FALSE(fs::exists(dir / "out" / "results.json"));
+  fs::remove_all(dir);
+}
+
+TEST_CASE("p2i bench: dataset.sequences keeps only the named sequences of a folder", "[unit]") {
+  const std::string study_room = p2i::testing::SharedDir() + "/data/study-room";
+  if (!fs::is_directory(study_room)) {
+    P2I_SKIP("real data not found at " << study_room << " (set P2I_SHARED_DIR)");
+  }
+  const fs::path dir = fs::temp_directory_path() / ("p2i_bench_seqs_" + std::to_string(getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  auto run = [&](const std::string& sequences) {
+    const std::string config = (dir / "seqs.yaml").string();
+    std::ofstream(config) << "dataset: {path: " << study_room
+                          << ", seven_scenes_invalid_depth: 0, sequences: " << sequences << "}\n"
+                          << "settings: [a1, b]\nperiod: 10\nmax_test_views: 2\n"
+                             "methods: [nearest]\nsizes: [{name: r16, resolution: 16}]\n"
+                             "threads: 1\nstrip_views: 0\n";
+    p2i::eval::BenchOptions o;
+    o.config_path = config;
+    o.out_dir = (dir / "out").string();
+    o.quiet = true;
+    try {
+      p2i::eval::RunBench(o);
+    } catch (const std::exception& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  // Both sequences of the folder: setting b (train seq-01, test seq-02) has what it needs; one
+  // named sequence leaves setting b without its second trajectory.
+  CHECK(run("[seq-01]").find("setting b needs 2 sequences") != std::string::npos);
+  const std::string unknown = run("[seq-09]");
+  CHECK(unknown.find("seq-09") != std::string::npos);
+  CHECK(unknown.find("seq-01, seq-02") != std::string::npos);
   fs::remove_all(dir);
 }

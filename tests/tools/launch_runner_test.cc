@@ -10,6 +10,7 @@
 
 #include <cerrno>
 #include <chrono>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -185,6 +186,37 @@ TEST_CASE("p2i launch prefixes node output and passes the contract command line"
   CHECK(run_dir_of("alpha") == run_dir_of("beta"));
   CHECK(run_dir_of("alpha") != "(unset)");
   CHECK_FALSE(fs::exists(run_dir_of("alpha")));  // the launcher's own run dir is cleaned up
+}
+
+TEST_CASE("p2i launch gives the nodes OMP_WAIT_POLICY=PASSIVE unless the user set one",
+          "[integration]") {
+  TempDir dir;
+  const std::string file = dir.Write("one.yaml", R"(launch:
+- node: {exec: fake_node, name: alpha, args: "--lines 0 --print-env OMP_WAIT_POLICY"}
+)");
+  const char* before = std::getenv("OMP_WAIT_POLICY");
+  const std::string saved = before != nullptr ? before : "";
+  const auto policy_seen = [&](const char* value) {
+    if (value == nullptr) {
+      ::unsetenv("OMP_WAIT_POLICY");
+    } else {
+      ::setenv("OMP_WAIT_POLICY", value, 1);
+    }
+    Launcher launcher({file});
+    REQUIRE(launcher.Wait() == 0);
+    const std::string key = "[alpha] OMP_WAIT_POLICY=";
+    const auto pos = launcher.out().find(key);
+    REQUIRE(pos != std::string::npos);
+    return launcher.out().substr(pos + key.size(),
+                                 launcher.out().find('\n', pos) - pos - key.size());
+  };
+  CHECK(policy_seen(nullptr) == "PASSIVE");
+  CHECK(policy_seen("active") == "active");  // the user's choice wins
+  if (before != nullptr) {
+    ::setenv("OMP_WAIT_POLICY", saved.c_str(), 1);
+  } else {
+    ::unsetenv("OMP_WAIT_POLICY");
+  }
 }
 
 TEST_CASE("p2i launch respawns respawn nodes until a required node exits", "[integration]") {
