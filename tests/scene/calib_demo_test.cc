@@ -1,5 +1,8 @@
 /// @file calib_demo_test.cc
-/// @brief calib/sim_64.yaml is exactly the sim camera as the demo's 64x64 views see it.
+/// @brief calib/sim_64.yaml and sim_128.yaml are exactly the sim camera as 64x64 and 128x128
+/// demo views see it.
+#include <string>
+
 #include <catch2/catch.hpp>
 
 #include "scene/camera_info.h"
@@ -8,13 +11,26 @@
 
 using p2i::scene::CameraInfo;
 
-TEST_CASE("calib/sim_64.yaml is sim.yaml centre-cropped and resized to 64x64", "[unit]") {
+namespace {
+
+// calib/NAME.yaml equals sim.yaml centre-cropped and resized to side x side, focal f, centre c.
+void CheckCropOfSim(const std::string& name, int side, double f, double c) {
   const std::string dir = p2i::testing::SourceDir() + "/calib/";
   const CameraInfo sim = CameraInfo::FromYamlFile(dir + "sim.yaml");
-  CameraInfo expected = p2i::scene::CenterCropResizeCamera(sim, 64, 64);
-  expected.camera_name = "sim_64";
-  const CameraInfo file = CameraInfo::FromYamlFile(dir + "sim_64.yaml");
+  CameraInfo expected = p2i::scene::CenterCropResizeCamera(sim, side, side);
+  expected.camera_name = name;
+  const CameraInfo file = CameraInfo::FromYamlFile(dir + name + ".yaml");
   CHECK(file.equals(expected, 1e-9));
-  CHECK(file.fx() == Approx(70.0));
-  CHECK(file.cx() == Approx(31.5));
+  CHECK(file.fx() == Approx(f));
+  CHECK(file.cx() == Approx(c));
+}
+
+}  // namespace
+
+TEST_CASE("calib/sim_64.yaml is sim.yaml centre-cropped and resized to 64x64", "[unit]") {
+  CheckCropOfSim("sim_64", 64, 70.0, 31.5);
+}
+
+TEST_CASE("calib/sim_128.yaml is sim.yaml centre-cropped and resized to 128x128", "[unit]") {
+  CheckCropOfSim("sim_128", 128, 140.0, 63.5);
 }
