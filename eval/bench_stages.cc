@@ -140,22 +140,17 @@ void ReadFolderData(const BenchConfig& c, Data* data) {
   scene::DatasetOptions o;
   o.format = d.format;
   o.seven_scenes_invalid_depth = d.seven_scenes_invalid_depth;
-  const scene::DatasetIndex all = scene::OpenDataset(d.path, o);
-  const auto names = all.Sequences();
-  for (const std::string& s : d.sequences) {
-    if (std::find(names.begin(), names.end(), s) == names.end()) {
-      std::string list;
-      for (const auto& n : names) list += (list.empty() ? "" : ", ") + n;
-      throw std::runtime_error("dataset.sequences names '" + s + "' but '" + d.path +
-                               "' holds only: " + list);
+  scene::DatasetIndex all = scene::OpenDataset(d.path, o);
+  if (!d.sequences.empty()) {
+    try {
+      all = all.SelectSequences(d.sequences);
+    } catch (const std::invalid_argument& e) {
+      throw std::runtime_error("dataset.sequences of '" + d.path + "': " + e.what());
     }
   }
   std::vector<scene::FrameRef> frames;
   std::map<std::string, int> seen, kept;
   for (const auto& f : all.frames()) {
-    if (!d.sequences.empty() &&
-        std::find(d.sequences.begin(), d.sequences.end(), f.sequence) == d.sequences.end())
-      continue;
     const int i = seen[f.sequence]++;
     if (i % d.frame_step != 0) continue;
     if (d.max_frames > 0 && kept[f.sequence] >= d.max_frames) continue;

@@ -211,7 +211,7 @@ std::string PrepareRunDir(const Options& o, bool* own) {
 // beside other busy processes was 2-10x slower than 1 thread; passive was as fast as 1 thread or
 // faster (docs/MODEL.md "Benchmark", issue 11 point 2). A value the user exported is kept.
 void SetThreadingDefaults() {
-  if (std::getenv("OMP_WAIT_POLICY") == nullptr) ::setenv("OMP_WAIT_POLICY", "PASSIVE", 0);
+  ::setenv("OMP_WAIT_POLICY", "PASSIVE", /*overwrite=*/0);
 }
 
 // Multi-host files: this host's registry, and the environment the nodes find their peers by.
