@@ -5,7 +5,8 @@
 /// with 8^3 blocks and with the learned refinement, and the fused scene's memory per m^3 of
 /// allocated blocks. The method is built through the method registry,
 /// as `p2i bench` and the synthesizer build it; transport is not included (pipeline_bench has
-/// it). Prints a table and writes JSON.
+/// it). Then where a view's time goes (raycast, hit refinement, crack fill, keyframe blend). Prints
+/// tables and writes JSON.
 ///
 /// Usage: OMP_NUM_THREADS=1 fusion_bench [--scene small_office] [--frames 40] [--views 30]
 ///                                       [--net models/refine_sim.pt] [--json fusion_bench.json]
@@ -23,6 +24,7 @@
 #include <nlohmann/json.hpp>
 #include <yaml-cpp/yaml.h>
 
+#include "fusion/fusion_scene.h"
 #include "fusion/fusion_synthesizer.h"
 #include "fusion/tsdf_volume.h"
 #include "model/method_registry.h"
@@ -157,6 +159,43 @@ nlohmann::json BenchRender(const std::string& label, const std::string& options,
   return j;
 }
 
+/// Where a view's time goes, at w x h on a FusionScene of the same frames (default options):
+/// Open3D's raycast alone, + the trilinear hit refinement, + the crack fill (the default raycast),
+/// then the raycast + keyframe blend (RenderCandidates). The full Render row adds the conversion
+/// to an 8-bit view and the hole fill (or the learned refinement).
+nlohmann::json BenchStages(const p2i::scene::RgbdDataset& train, const std::vector<p2i::scene::Pose>& test,
+                           int w, int h) {
+  const p2i::scene::RgbdDataset frames = p2i::scene::CenterCropResizeDataset(train, w, h);
+  struct Stage { std::string label; bool refine; int cracks; bool blend; };
+  const std::vector<Stage> stages = {{"open3d raycast", false, 0, false},
+                                     {"+ hit refinement", true, 0, false},
+                                     {"+ crack fill", true, 2, false},
+                                     {"+ keyframe blend", true, 2, true}};
+  nlohmann::json out = nlohmann::json::object();
+  for (const Stage& st : stages) {
+    p2i::fusion::FusionSceneOptions o;
+    o.tsdf.refine_hits = st.refine;
+    o.tsdf.crack_fill_passes = st.cracks;
+    p2i::fusion::FusionScene scene(frames.camera, o);
+    for (const auto& f : frames.frames) scene.AddFrame(f);
+    auto once = [&](const p2i::scene::Pose& pose) {
+      if (st.blend) scene.RenderCandidates(pose, frames.camera);
+      else scene.tsdf().Raycast(pose, frames.camera);
+    };
+    once(test.front());
+    std::vector<double> ms;
+    for (const auto& pose : test) {
+      const auto a = Clock::now();
+      once(pose);
+      ms.push_back(Ms(a, Clock::now()));
+    }
+    const double p50 = Median(ms);
+    std::printf("  stage %-18s %4dx%-4d %9.1f ms\n", st.label.c_str(), w, h, p50);
+    out[st.label] = p50;
+  }
+  return out;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -187,6 +226,10 @@ int main(int argc, char** argv) {
     for (const auto& size : {std::make_pair(128, 128), std::make_pair(320, 240)})
       for (const Row& r : rows)
         out["render"].push_back(BenchRender(r.label, r.options, train, test, size.first, size.second));
+    std::printf("stages (median ms per view, cumulative):\n");
+    for (const auto& size : {std::make_pair(128, 128), std::make_pair(320, 240)})
+      out["stages_ms_p50"][std::to_string(size.first) + "x" + std::to_string(size.second)] =
+          BenchStages(train, test, size.first, size.second);
     std::ofstream(a.json) << out.dump(2) << "\n";
     std::printf("wrote %s\n", a.json.c_str());
   } catch (const std::exception& e) {

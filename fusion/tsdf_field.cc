@@ -12,7 +12,10 @@ int64_t FloorDiv(int64_t a, int64_t b) { return a >= 0 ? a / b : -((-a + b - 1) 
 }  // namespace
 
 TsdfField::TsdfField(float voxel_size, int block_resolution, const float* tsdf, const float* weight)
-    : voxel_(voxel_size), res_(block_resolution), tsdf_(tsdf), weight_(weight) {}
+    : voxel_(voxel_size), res_(block_resolution), tsdf_(tsdf), weight_(weight) {
+  for (int s = 0; s < 8; ++s)
+    if ((1 << s) == res_) shift_ = s;
+}
 
 int64_t TsdfField::Key(int64_t bx, int64_t by, int64_t bz) {
   constexpr int64_t kOffset = int64_t{1} << 20, kMask = (int64_t{1} << 21) - 1;
@@ -35,31 +38,13 @@ void TsdfField::Seal() {
   const int64_t nx = hi_[0] - lo_[0] + 1, ny = hi_[1] - lo_[1] + 1, nz = hi_[2] - lo_[2] + 1;
   if (nx * ny * nz > kMaxDenseCells) return;
   dense_.assign(static_cast<size_t>(nx * ny * nz), -1);
+  dims_[0] = static_cast<uint64_t>(nx), dims_[1] = static_cast<uint64_t>(ny), dims_[2] = static_cast<uint64_t>(nz);
   for (int64_t z = 0; z < nz; ++z)
     for (int64_t y = 0; y < ny; ++y)
       for (int64_t x = 0; x < nx; ++x) {
         const auto it = blocks_.find(Key(lo_[0] + x, lo_[1] + y, lo_[2] + z));
         if (it != blocks_.end()) dense_[static_cast<size_t>((z * ny + y) * nx + x)] = it->second;
       }
-}
-
-int64_t TsdfField::BlockIndex(int64_t bx, int64_t by, int64_t bz) const {
-  if (!dense_.empty()) {
-    if (bx < lo_[0] || by < lo_[1] || bz < lo_[2] || bx > hi_[0] || by > hi_[1] || bz > hi_[2]) return -1;
-    const int64_t nx = hi_[0] - lo_[0] + 1, ny = hi_[1] - lo_[1] + 1;
-    return dense_[static_cast<size_t>(((bz - lo_[2]) * ny + (by - lo_[1])) * nx + (bx - lo_[0]))];
-  }
-  const auto it = blocks_.find(Key(bx, by, bz));
-  return it == blocks_.end() ? -1 : it->second;
-}
-
-int64_t TsdfField::Find(int64_t vx, int64_t vy, int64_t vz, int64_t* local) const {
-  const int64_t bx = FloorDiv(vx, res_), by = FloorDiv(vy, res_), bz = FloorDiv(vz, res_);
-  const int64_t block = BlockIndex(bx, by, bz);
-  if (block < 0) return -1;
-  const int64_t lx = vx - bx * res_, ly = vy - by * res_, lz = vz - bz * res_;
-  *local = (lz * res_ + ly) * res_ + lx;
-  return block;
 }
 
 bool TsdfField::Sample(const Eigen::Vector3f& p, float* value) const {
@@ -70,7 +55,9 @@ bool TsdfField::Sample(const Eigen::Vector3f& p, float* value) const {
   const int64_t res3 = static_cast<int64_t>(res_) * res_ * res_;
   // Most cells lie inside one block: one block lookup serves all eight corners (the lookups were
   // most of the hit refinement's cost); a cell across a block edge looks each corner up.
-  const int64_t bx = FloorDiv(x0, res_), by = FloorDiv(y0, res_), bz = FloorDiv(z0, res_);
+  const int64_t bx = shift_ >= 0 ? x0 >> shift_ : FloorDiv(x0, res_);
+  const int64_t by = shift_ >= 0 ? y0 >> shift_ : FloorDiv(y0, res_);
+  const int64_t bz = shift_ >= 0 ? z0 >> shift_ : FloorDiv(z0, res_);
   const int64_t lx = x0 - bx * res_, ly = y0 - by * res_, lz = z0 - bz * res_;
   const bool one_block = lx + 1 < res_ && ly + 1 < res_ && lz + 1 < res_;
   int64_t base = 0;

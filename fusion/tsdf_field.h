@@ -66,10 +66,44 @@ class TsdfField {
   /// Buffer index of block (bx, by, bz), or -1.
   int64_t BlockIndex(int64_t bx, int64_t by, int64_t bz) const;
 
+  int shift_ = -1;  ///< log2(res_) when res_ is a power of two (shifts and masks instead of divisions)
   std::unordered_map<int64_t, int64_t> blocks_;
   // Bounding box of the blocks (block units) and, once sealed, the dense table over it.
   int64_t lo_[3] = {0, 0, 0}, hi_[3] = {-1, -1, -1};
   std::vector<int64_t> dense_;
+  uint64_t dims_[3] = {0, 0, 0};  ///< the dense table's size per axis (blocks)
 };
+
+// The block lookups of every trilinear read, inline (the library is built with -fPIC: calls between
+// its own exported functions would go through the PLT and could not be inlined).
+
+inline int64_t TsdfField::BlockIndex(int64_t bx, int64_t by, int64_t bz) const {
+  if (!dense_.empty()) {
+    // One unsigned compare per axis: below lo_ wraps to a huge value.
+    const uint64_t x = static_cast<uint64_t>(bx - lo_[0]), y = static_cast<uint64_t>(by - lo_[1]),
+                   z = static_cast<uint64_t>(bz - lo_[2]);
+    if (x >= dims_[0] || y >= dims_[1] || z >= dims_[2]) return -1;
+    return dense_[(z * dims_[1] + y) * dims_[0] + x];
+  }
+  const auto it = blocks_.find(Key(bx, by, bz));
+  return it == blocks_.end() ? -1 : it->second;
+}
+
+inline int64_t TsdfField::Find(int64_t vx, int64_t vy, int64_t vz, int64_t* local) const {
+  if (shift_ >= 0) {  // arithmetic shifts floor negative voxel indices too
+    const int64_t block = BlockIndex(vx >> shift_, vy >> shift_, vz >> shift_);
+    if (block < 0) return -1;
+    const int64_t m = res_ - 1;
+    *local = (((vz & m) << shift_) + (vy & m)) * res_ + (vx & m);
+    return block;
+  }
+  auto floor_div = [](int64_t a, int64_t b) { return a >= 0 ? a / b : -((-a + b - 1) / b); };
+  const int64_t bx = floor_div(vx, res_), by = floor_div(vy, res_), bz = floor_div(vz, res_);
+  const int64_t block = BlockIndex(bx, by, bz);
+  if (block < 0) return -1;
+  const int64_t lx = vx - bx * res_, ly = vy - by * res_, lz = vz - bz * res_;
+  *local = (lz * res_ + ly) * res_ + lx;
+  return block;
+}
 
 }  // namespace p2i::fusion

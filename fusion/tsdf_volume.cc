@@ -180,6 +180,24 @@ void TsdfOptions::Validate() const {
 struct TsdfVolume::Impl {
   tg::VoxelBlockGrid grid;
   int64_t frames = 0;
+  /// The grid's blocks for trilinear reads, built on the first raycast after a change (its
+  /// pointers into the grid's arrays are valid until the next Integrate or Load).
+  std::unique_ptr<TsdfField> field;
+
+  const TsdfField& Field(const TsdfOptions& o) {
+    if (field) return *field;
+    core::HashMap map = grid.GetHashMap();
+    const core::Tensor active = map.GetActiveIndices().To(core::Int64);
+    const core::Tensor keys = map.GetKeyTensor().IndexGet({active}).Contiguous();
+    field = std::make_unique<TsdfField>(static_cast<float>(o.voxel_size_m), o.block_resolution,
+                                        grid.GetAttribute("tsdf").GetDataPtr<float>(),
+                                        grid.GetAttribute("weight").GetDataPtr<float>());
+    const int* kp = keys.GetDataPtr<int>();
+    const int64_t* ap = active.GetDataPtr<int64_t>();
+    for (int64_t i = 0; i < keys.GetLength(); ++i) field->AddBlock(kp[3 * i], kp[3 * i + 1], kp[3 * i + 2], ap[i]);
+    field->Seal();
+    return *field;
+  }
 };
 
 TsdfVolume::TsdfVolume(TsdfOptions options) : options_(options) {
@@ -206,6 +224,7 @@ void TsdfVolume::Integrate(const scene::RgbdSample& frame, const scene::CameraIn
                                 std::to_string(size.width) + "x" + std::to_string(size.height));
   }
   UseThreads(options_.threads);
+  impl_->field.reset();
   cv::Mat depth = frame.depth.isContinuous() ? frame.depth : frame.depth.clone();
   cv::Mat colour;
   frame.rgb.convertTo(colour, CV_32FC3, 1.0 / 255.0);
@@ -334,22 +353,10 @@ TsdfRaycast TsdfVolume::Raycast(const scene::Pose& pose, const scene::CameraInfo
   const core::Tensor depth = result["depth"].Contiguous();
   const core::Tensor normal = result["normal"].Contiguous();
   const core::Tensor colour = result["color"].Contiguous();
-  std::unique_ptr<TsdfField> field;
-  if (options_.refine_hits) {
-    // The grid's own arrays (contiguous per block buffer index): nothing is copied.
-    const core::Tensor& tsdf = impl_->grid.GetAttribute("tsdf");
-    const core::Tensor& weight = impl_->grid.GetAttribute("weight");
-    field = std::make_unique<TsdfField>(static_cast<float>(options_.voxel_size_m),
-                                        options_.block_resolution, tsdf.GetDataPtr<float>(),
-                                        weight.GetDataPtr<float>());
-    const int64_t* ap = active.GetDataPtr<int64_t>();
-    for (int64_t i = 0; i < n; ++i) field->AddBlock(kp[3 * i], kp[3 * i + 1], kp[3 * i + 2], ap[i]);
-    field->Seal();
-  }
+  const TsdfField* field = options_.refine_hits ? &impl_->Field(options_) : nullptr;
   CopyHits(depth.GetDataPtr<float>(), normal.GetDataPtr<float>(), colour.GetDataPtr<float>(), pose,
-           camera, field.get(), &out);
-  for (int pass = 0; pass < options_.crack_fill_passes; ++pass)
-    FillCracks(field.get(), pose, camera, &out);
+           camera, field, &out);
+  for (int pass = 0; pass < options_.crack_fill_passes; ++pass) FillCracks(field, pose, camera, &out);
   return out;
 }
 
@@ -379,6 +386,7 @@ TsdfVolume TsdfVolume::Load(const std::string& path, TsdfOptions options) {
     throw std::runtime_error("TsdfVolume::Load: no file " + path);
   TsdfVolume v(options);
   try {
+    v.impl_->field.reset();
     v.impl_->grid = tg::VoxelBlockGrid::Load(path);
   } catch (const std::exception& e) {
     throw std::runtime_error("TsdfVolume::Load: " + path + " is not a saved volume: " + e.what());
