@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -159,7 +160,7 @@ std::vector<uint64_t> ListFusionVersions(const std::string& versions_dir) {
   return out;
 }
 
-int PruneFusionVersions(const std::string& versions_dir, int keep) {
+int PruneFusionVersions(const std::string& versions_dir, int keep, double min_age_s) {
   if (keep < 1) throw std::invalid_argument("PruneFusionVersions: keep must be >= 1");
   int removed = 0;
   if (!fs::is_directory(versions_dir)) return 0;
@@ -172,8 +173,13 @@ int PruneFusionVersions(const std::string& versions_dir, int keep) {
     }
   }
   const std::vector<uint64_t> versions = ListFusionVersions(versions_dir);
+  const auto now = fs::file_time_type::clock::now();
   for (size_t i = 0; i + keep < versions.size(); ++i) {
-    fs::remove_all(FusionVersionDir(versions_dir, versions[i]), ec);
+    const std::string dir = FusionVersionDir(versions_dir, versions[i]);
+    const auto written = fs::last_write_time(dir, ec);
+    if (!ec && std::chrono::duration<double>(now - written).count() < min_age_s) continue;
+    ec.clear();
+    fs::remove_all(dir, ec);
     ++removed;
   }
   return removed;

@@ -60,7 +60,9 @@ FusionVersionManifest ReadFusionVersion(const std::string& dir);
 std::vector<uint64_t> ListFusionVersions(const std::string& versions_dir);
 
 /// Removes `*.tmp.*` folders left by a killed writer, and all but the newest `keep` committed
-/// versions (keep >= 1). Returns the number of folders removed.
-int PruneFusionVersions(const std::string& versions_dir, int keep);
+/// versions (keep >= 1), except those committed less than `min_age_s` seconds ago (by the
+/// folder's modification time): a reader that was told of a version a moment ago (a synthesizer
+/// loading it on a busy machine) still finds it. Returns the number of folders removed.
+int PruneFusionVersions(const std::string& versions_dir, int keep, double min_age_s = 0.0);
 
 }  // namespace p2i::model

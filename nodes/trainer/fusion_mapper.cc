@@ -3,6 +3,7 @@
 #include "nodes/trainer/fusion_mapper.h"
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <set>
@@ -24,6 +25,8 @@ void FusionMapperOptions::Validate() const {
   if (publish_every_frames < 1)
     fail("publish_every_frames must be >= 1, got " + std::to_string(publish_every_frames));
   if (keep_versions < 1) fail("keep_versions must be >= 1, got " + std::to_string(keep_versions));
+  if (!(keep_seconds >= 0.0) || !std::isfinite(keep_seconds))
+    fail("keep_seconds must be finite and >= 0, got " + std::to_string(keep_seconds));
   if (queue_frames < 1) fail("queue_frames must be >= 1, got " + std::to_string(queue_frames));
   if (!refine_net.empty() && !fs::is_regular_file(refine_net))
     fail("refine_net: no file '" + refine_net + "' (a `p2i refine train-sim` output such as "
@@ -159,7 +162,7 @@ void FusionMapper::Publish() {
 /// Old versions beyond keep_versions, and keyframe folders of earlier sessions that no kept
 /// version references.
 void FusionMapper::Prune() {
-  model::PruneFusionVersions(versions_dir_, options_.keep_versions);
+  model::PruneFusionVersions(versions_dir_, options_.keep_versions, options_.keep_seconds);
   std::set<std::string> used{keyframes_dir_};
   for (const uint64_t v : model::ListFusionVersions(versions_dir_)) {
     try {

@@ -31,6 +31,11 @@ struct FusionMapperOptions {
   std::string work_dir;
   int publish_every_frames = 30;  ///< integrated frames between published versions
   int keep_versions = 3;          ///< committed versions kept on disk (older ones pruned)
+  /// ... and none pruned until it is this old: a synthesizer told of a version finds it even when
+  /// loading takes longer than a few publish periods (seen on a busy 2-core box: every version it
+  /// started loading was pruned first, and it never swapped). Costs up to keep_seconds x the
+  /// publish rate versions of disk.
+  double keep_seconds = 10.0;
   /// Frames waiting for integration; when a new one arrives to a full queue the oldest is
   /// dropped (counted): a camera faster than integration is mapped at integration's rate.
   int queue_frames = 2;

@@ -2,6 +2,8 @@
 /// @brief The trainer node's parameters -> TrainerNodeOptions, and their validation.
 #include "nodes/trainer/trainer_node_options.h"
 
+#include <cmath>
+
 #include <yaml-cpp/yaml.h>
 
 #include "model/distributed.h"
@@ -54,6 +56,9 @@ void DeclareMapper(runtime::Parameters& p, FusionMapperOptions* o) {
       "method fusion: integrated frames between published versions");
   o->keep_versions = p.Declare<int>("keep_versions", o->keep_versions,
                                     "method fusion: committed versions kept on disk");
+  o->keep_seconds = p.Declare<double>(
+      "keep_seconds", o->keep_seconds,
+      "method fusion: no version is pruned before it is this old (readers still loading it)");
   o->queue_frames = p.Declare<int>(
       "queue_frames", o->queue_frames,
       "method fusion: frames waiting for integration (older ones are dropped, counted)");
@@ -106,6 +111,8 @@ void TrainerNodeOptions::Validate() const {
                 mapper.publish_every_frames, "be >= 1", "e.g. publish_every_frames:=30");
     CheckOption(mapper.keep_versions >= 1, n, "keep_versions", mapper.keep_versions, "be >= 1",
                 "e.g. keep_versions:=3");
+    CheckOption(mapper.keep_seconds >= 0.0 && std::isfinite(mapper.keep_seconds), n, "keep_seconds",
+                mapper.keep_seconds, "be finite and >= 0", "e.g. keep_seconds:=10");
     CheckOption(mapper.queue_frames >= 1, n, "queue_frames", mapper.queue_frames, "be >= 1",
                 "e.g. queue_frames:=2");
   }

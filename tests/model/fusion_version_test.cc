@@ -7,6 +7,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <chrono>
 #include <filesystem>
 #include <fstream>
 
@@ -116,5 +117,23 @@ TEST_CASE("A writer killed mid-write leaves the previous version loadable", "[un
   CHECK(ListFusionVersions(versions) == std::vector<uint64_t>({2, 3}));
   for (const auto& e : fs::directory_iterator(versions))
     CHECK(e.path().filename().string().find(".tmp.") == std::string::npos);
+  fs::remove_all(root);
+}
+
+TEST_CASE("Pruning keeps versions younger than the minimum age, beyond keep", "[unit]") {
+  const std::string root = testing::TempDir("fusion_version_age");
+  const std::string versions = root + "/versions";
+  for (uint64_t v = 1; v <= 3; ++v)
+    WriteFusionVersion(FusionVersionDir(versions, v), Manifest(v, root + "/keyframes"), Payload);
+  // Just written: a reader told of version 1 a moment ago still finds it.
+  CHECK(PruneFusionVersions(versions, 1, 3600.0) == 0);
+  CHECK(ListFusionVersions(versions) == std::vector<uint64_t>({1, 2, 3}));
+  // Version 1 an hour old: it goes; 2 is young and stays although keep is 1.
+  fs::last_write_time(FusionVersionDir(versions, 1), fs::file_time_type::clock::now() - std::chrono::hours(1));
+  CHECK(PruneFusionVersions(versions, 1, 3600.0 - 60.0) == 1);
+  CHECK(ListFusionVersions(versions) == std::vector<uint64_t>({2, 3}));
+  // No minimum age: only the newest is kept.
+  CHECK(PruneFusionVersions(versions, 1) == 1);
+  CHECK(ListFusionVersions(versions) == std::vector<uint64_t>{3});
   fs::remove_all(root);
 }

@@ -7,8 +7,11 @@
 #include <signal.h>
 
 #include <chrono>
+#include <exception>
 #include <filesystem>
 #include <fstream>
+#include <functional>
+#include <iostream>
 #include <map>
 #include <memory>
 #include <sstream>
@@ -51,8 +54,12 @@ class LaunchedGraph {
     launcher_ = std::make_unique<p2i::testing::Process>(
         std::vector<std::string>{"/bin/sh", "-c", cmd});
   }
+  /// A test that ends by a failed REQUIRE (an exception unwinding through here) gets the graph's
+  /// log on stderr: an INFO(Log()) written at the start would show only the log of that moment.
   ~LaunchedGraph() {
     if (launcher_ && launcher_->Running()) launcher_->Terminate();
+    if (std::uncaught_exceptions() > 0)
+      std::cerr << "---- launch log of the failed test (" << log_ << ") ----\n" << Log() << "---- end ----\n";
   }
 
   const std::string& Run() const { return run_.Path(); }
@@ -119,6 +126,20 @@ class StatusWatcher {
     if (it == latest_.end()) return 0.0;
     const auto v = it->second.values().find(key);
     return v == it->second.values().end() ? 0.0 : v->second;
+  }
+  /// Every node's newest counters and values, one node per line (for failure messages: Catch's
+  /// INFO builds its text when it runs, so it must run after the wait it explains).
+  std::string Describe() const {
+    std::string out;
+    for (const auto& [node, s] : latest_) {
+      out += node + ":";
+      for (const auto& [k, v] : s.counters()) out += " " + k + "=" + std::to_string(v);
+      for (const auto& [k, v] : s.values()) out += " " + k + "=" + std::to_string(v);
+      out += "\n";
+    }
+    for (const auto& [node, sub] : subs_)
+      if (!latest_.count(node)) out += node + ": no status received\n";
+    return out;
   }
   /// Polls until `cond()` holds or `timeout` passes; returns cond().
   bool WaitFor(const std::function<bool()>& cond, std::chrono::seconds timeout) {

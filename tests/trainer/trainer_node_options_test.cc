@@ -15,7 +15,7 @@ namespace {
 using namespace p2i::testing;
 
 TEST_CASE("TrainerNodeOptions: declared defaults are the field initialisers", "[unit]") {
-  const runtime::Parameters p = CheckDefaults<TrainerNodeOptions>(26);
+  const runtime::Parameters p = CheckDefaults<TrainerNodeOptions>(27);
   const TrainingLoop::Options loop;
   CHECK(p.Declared().at("buffer_mb").default_text == "256");  // ReplayBuffer::Options'
   CHECK(p.Declared().at("publish_every_steps").default_text ==
@@ -78,6 +78,7 @@ TEST_CASE("TrainerNodeOptions::Validate refuses each bad value, naming parameter
           {{{"method", "fusion"}, {"publish_every_frames", "0"}},
            "publish_every_frames must be >= 1 (got 0)"},
           {{{"method", "fusion"}, {"keep_versions", "0"}}, "keep_versions must be >= 1 (got 0)"},
+          {{{"method", "fusion"}, {"keep_seconds", "-1"}}, "keep_seconds must be finite and >= 0 (got -1)"},
           {{{"method", "fusion"}, {"queue_frames", "0"}}, "queue_frames must be >= 1 (got 0)"},
           {{{"method", "fusion"}, {"world_size", "2"}, {"master", "127.0.0.1:29500"}},
            "world_size must be 1 with method fusion (got 2)"},
@@ -89,12 +90,14 @@ TEST_CASE("TrainerNodeOptions: method fusion reads the mapper's parameters", "[u
       {{"method", "fusion"},
        {"fusion_options", "{tsdf: {voxel_size_m: 0.04}, blend: {keyframe_min_distance: 0.1}}"},
        {"publish_every_frames", "12"},
-       {"keep_versions", "4"}});
+       {"keep_versions", "4"},
+       {"keep_seconds", "2.5"}});
   CHECK(o.method == "fusion");
   CHECK(o.mapper.scene.tsdf.voxel_size_m == 0.04);
   CHECK(o.mapper.scene.blend.keyframe_min_distance == 0.1);
   CHECK(o.mapper.publish_every_frames == 12);
   CHECK(o.mapper.keep_versions == 4);
+  CHECK(o.mapper.keep_seconds == 2.5);
   CHECK_NOTHROW(o.Validate());
   // A bad key in fusion_options stops at start-up, naming the parameter and the key.
   CHECK_THROWS_WITH(OptionsFrom<TrainerNodeOptions>({{"fusion_options", "{tsdf: {voxel: 0.1}}"}}),
