@@ -38,7 +38,8 @@ FusionMapper::FusionMapper(FusionMapperOptions options, VersionCallback on_versi
   options_.Validate();
   versions_dir_ = (fs::absolute(options_.work_dir) / "versions").string();
   fs::create_directories(versions_dir_);
-  model::PruneFusionVersions(versions_dir_, options_.keep_versions);  // a killed writer's temps
+  // A killed writer's temps; old versions only once keep_seconds old (a reader may be loading one).
+  model::PruneFusionVersions(versions_dir_, options_.keep_versions, options_.keep_seconds);
   const std::vector<uint64_t> existing = model::ListFusionVersions(versions_dir_);
   next_version_ = existing.empty() ? 1 : existing.back() + 1;
   char name[32];

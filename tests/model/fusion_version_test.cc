@@ -129,7 +129,8 @@ TEST_CASE("Pruning keeps versions younger than the minimum age, beyond keep", "[
   CHECK(PruneFusionVersions(versions, 1, 3600.0) == 0);
   CHECK(ListFusionVersions(versions) == std::vector<uint64_t>({1, 2, 3}));
   // Version 1 an hour old: it goes; 2 is young and stays although keep is 1.
-  fs::last_write_time(FusionVersionDir(versions, 1), fs::file_time_type::clock::now() - std::chrono::hours(1));
+  fs::last_write_time(FusionVersionDir(versions, 1),
+                      fs::file_time_type::clock::now() - std::chrono::hours(1));
   CHECK(PruneFusionVersions(versions, 1, 3600.0 - 60.0) == 1);
   CHECK(ListFusionVersions(versions) == std::vector<uint64_t>({2, 3}));
   // No minimum age: only the newest is kept.

@@ -59,7 +59,8 @@ class LaunchedGraph {
   ~LaunchedGraph() {
     if (launcher_ && launcher_->Running()) launcher_->Terminate();
     if (std::uncaught_exceptions() > 0)
-      std::cerr << "---- launch log of the failed test (" << log_ << ") ----\n" << Log() << "---- end ----\n";
+      std::cerr << "---- launch log of the failed test (" << log_ << ") ----\n"
+                << Log() << "---- end ----\n";
   }
 
   const std::string& Run() const { return run_.Path(); }

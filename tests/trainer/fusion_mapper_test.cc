@@ -23,6 +23,7 @@ FusionMapperOptions Options(const std::string& dir) {
   o.work_dir = dir;
   o.publish_every_frames = 5;
   o.keep_versions = 2;
+  o.keep_seconds = 0.0;  // versions pruned by count alone (the age guard: fusion_version_test.cc)
   o.scene.blend.keyframe_min_distance = 0.05;
   return o;
 }
@@ -120,6 +121,9 @@ TEST_CASE("fusion mapper: another camera is refused, a full queue drops the olde
   bad = Options(dir);
   bad.publish_every_frames = 0;
   CHECK_THROWS_WITH(FusionMapper(bad, nullptr), Catch::Contains("publish_every_frames"));
+  bad = Options(dir);
+  bad.keep_seconds = -1.0;
+  CHECK_THROWS_WITH(FusionMapper(bad, nullptr), Catch::Contains("keep_seconds must be finite and >= 0"));
 }
 
 }  // namespace p2i::trainer
