@@ -19,6 +19,7 @@
 #include <iostream>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -223,11 +224,12 @@ int main(int argc, char** argv) {
                              {"blend_no_refine_hits", "{tsdf: {refine_hits: false}}"},
                              {"blend_block8", "{tsdf: {block_resolution: 8}}"}};
     if (!a.net.empty()) rows.push_back({"refined (zero-shot)", "{refine: {net: '" + a.net + "'}}"});
-    for (const auto& size : {std::make_pair(128, 128), std::make_pair(320, 240)})
+    const std::vector<std::pair<int, int>> sizes = {{128, 128}, {320, 240}};
+    for (const auto& size : sizes)
       for (const Row& r : rows)
         out["render"].push_back(BenchRender(r.label, r.options, train, test, size.first, size.second));
     std::printf("stages (median ms per view, cumulative):\n");
-    for (const auto& size : {std::make_pair(128, 128), std::make_pair(320, 240)})
+    for (const auto& size : sizes)
       out["stages_ms_p50"][std::to_string(size.first) + "x" + std::to_string(size.second)] =
           BenchStages(train, test, size.first, size.second);
     std::ofstream(a.json) << out.dump(2) << "\n";

@@ -5,11 +5,6 @@
 #include <cmath>
 
 namespace p2i::fusion {
-namespace {
-
-int64_t FloorDiv(int64_t a, int64_t b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
-
-}  // namespace
 
 TsdfField::TsdfField(float voxel_size, int block_resolution, const float* tsdf, const float* weight)
     : voxel_(voxel_size), res_(block_resolution), tsdf_(tsdf), weight_(weight) {
@@ -55,9 +50,7 @@ bool TsdfField::Sample(const Eigen::Vector3f& p, float* value) const {
   const int64_t res3 = static_cast<int64_t>(res_) * res_ * res_;
   // Most cells lie inside one block: one block lookup serves all eight corners (the lookups were
   // most of the hit refinement's cost); a cell across a block edge looks each corner up.
-  const int64_t bx = shift_ >= 0 ? x0 >> shift_ : FloorDiv(x0, res_);
-  const int64_t by = shift_ >= 0 ? y0 >> shift_ : FloorDiv(y0, res_);
-  const int64_t bz = shift_ >= 0 ? z0 >> shift_ : FloorDiv(z0, res_);
+  const int64_t bx = BlockOf(x0), by = BlockOf(y0), bz = BlockOf(z0);
   const int64_t lx = x0 - bx * res_, ly = y0 - by * res_, lz = z0 - bz * res_;
   const bool one_block = lx + 1 < res_ && ly + 1 < res_ && lz + 1 < res_;
   int64_t base = 0;

@@ -65,6 +65,8 @@ class TsdfField {
   const float* weight_;
   /// Buffer index of block (bx, by, bz), or -1.
   int64_t BlockIndex(int64_t bx, int64_t by, int64_t bz) const;
+  /// The block coordinate of voxel coordinate v (floor of v / res_).
+  int64_t BlockOf(int64_t v) const;
 
   int shift_ = -1;  ///< log2(res_) when res_ is a power of two (shifts and masks instead of divisions)
   std::unordered_map<int64_t, int64_t> blocks_;
@@ -89,20 +91,16 @@ inline int64_t TsdfField::BlockIndex(int64_t bx, int64_t by, int64_t bz) const {
   return it == blocks_.end() ? -1 : it->second;
 }
 
+inline int64_t TsdfField::BlockOf(int64_t v) const {
+  if (shift_ >= 0) return v >> shift_;  // arithmetic shifts floor negative voxel indices too
+  return v >= 0 ? v / res_ : -((-v + res_ - 1) / res_);
+}
+
 inline int64_t TsdfField::Find(int64_t vx, int64_t vy, int64_t vz, int64_t* local) const {
-  if (shift_ >= 0) {  // arithmetic shifts floor negative voxel indices too
-    const int64_t block = BlockIndex(vx >> shift_, vy >> shift_, vz >> shift_);
-    if (block < 0) return -1;
-    const int64_t m = res_ - 1;
-    *local = (((vz & m) << shift_) + (vy & m)) * res_ + (vx & m);
-    return block;
-  }
-  auto floor_div = [](int64_t a, int64_t b) { return a >= 0 ? a / b : -((-a + b - 1) / b); };
-  const int64_t bx = floor_div(vx, res_), by = floor_div(vy, res_), bz = floor_div(vz, res_);
+  const int64_t bx = BlockOf(vx), by = BlockOf(vy), bz = BlockOf(vz);
   const int64_t block = BlockIndex(bx, by, bz);
   if (block < 0) return -1;
-  const int64_t lx = vx - bx * res_, ly = vy - by * res_, lz = vz - bz * res_;
-  *local = (lz * res_ + ly) * res_ + lx;
+  *local = ((vz - bz * res_) * res_ + (vy - by * res_)) * res_ + (vx - bx * res_);
   return block;
 }
 

@@ -181,20 +181,17 @@ struct TsdfVolume::Impl {
   tg::VoxelBlockGrid grid;
   int64_t frames = 0;
   /// The grid's blocks for trilinear reads, built on the first raycast after a change (its
-  /// pointers into the grid's arrays are valid until the next Integrate or Load).
+  /// pointers into the grid's arrays are valid until the next Integrate).
   std::unique_ptr<TsdfField> field;
 
-  const TsdfField& Field(const TsdfOptions& o) {
+  /// The field, built from the n block keys `kp` (x, y, z each) at buffer indices `ap` (the
+  /// grid's active blocks, which the raycast has read already) unless it is still valid.
+  const TsdfField& Field(const TsdfOptions& o, const int* kp, const int64_t* ap, int64_t n) {
     if (field) return *field;
-    core::HashMap map = grid.GetHashMap();
-    const core::Tensor active = map.GetActiveIndices().To(core::Int64);
-    const core::Tensor keys = map.GetKeyTensor().IndexGet({active}).Contiguous();
     field = std::make_unique<TsdfField>(static_cast<float>(o.voxel_size_m), o.block_resolution,
                                         grid.GetAttribute("tsdf").GetDataPtr<float>(),
                                         grid.GetAttribute("weight").GetDataPtr<float>());
-    const int* kp = keys.GetDataPtr<int>();
-    const int64_t* ap = active.GetDataPtr<int64_t>();
-    for (int64_t i = 0; i < keys.GetLength(); ++i) field->AddBlock(kp[3 * i], kp[3 * i + 1], kp[3 * i + 2], ap[i]);
+    for (int64_t i = 0; i < n; ++i) field->AddBlock(kp[3 * i], kp[3 * i + 1], kp[3 * i + 2], ap[i]);
     field->Seal();
     return *field;
   }
@@ -353,7 +350,8 @@ TsdfRaycast TsdfVolume::Raycast(const scene::Pose& pose, const scene::CameraInfo
   const core::Tensor depth = result["depth"].Contiguous();
   const core::Tensor normal = result["normal"].Contiguous();
   const core::Tensor colour = result["color"].Contiguous();
-  const TsdfField* field = options_.refine_hits ? &impl_->Field(options_) : nullptr;
+  const TsdfField* field =
+      options_.refine_hits ? &impl_->Field(options_, kp, active.GetDataPtr<int64_t>(), n) : nullptr;
   CopyHits(depth.GetDataPtr<float>(), normal.GetDataPtr<float>(), colour.GetDataPtr<float>(), pose,
            camera, field, &out);
   for (int pass = 0; pass < options_.crack_fill_passes; ++pass) FillCracks(field, pose, camera, &out);
@@ -386,7 +384,6 @@ TsdfVolume TsdfVolume::Load(const std::string& path, TsdfOptions options) {
     throw std::runtime_error("TsdfVolume::Load: no file " + path);
   TsdfVolume v(options);
   try {
-    v.impl_->field.reset();
     v.impl_->grid = tg::VoxelBlockGrid::Load(path);
   } catch (const std::exception& e) {
     throw std::runtime_error("TsdfVolume::Load: " + path + " is not a saved volume: " + e.what());
