@@ -1,11 +1,13 @@
 /// @file fusion_bench.cc
 /// @brief Speed and memory of the `fusion` method (issue 12's speed targets): TSDF integration
 /// time per camera frame (against a 30 Hz camera's 33.3 ms) with blocks of 16^3 (the default) and
-/// 8^3 voxels, render time per view at 128x128 and 320x240 with the hit refinement on and off,
-/// with 8^3 blocks and with the learned refinement, and the fused scene's memory per m^3 of
+/// 8^3 voxels, render time per view at 128x128 and 320x240 with the default surface (the TSDF's
+/// mesh), with the raycast (hit refinement on and off), with 8^3 blocks and with the learned
+/// refinement, and the fused scene's memory per m^3 of
 /// allocated blocks. The method is built through the method registry,
 /// as `p2i bench` and the synthesizer build it; transport is not included (pipeline_bench has
-/// it). Then where a view's time goes (raycast, hit refinement, crack fill, keyframe blend). Prints
+/// it). Then where a view's time goes (raycast, hit refinement, crack fill, or the mesh's z-buffer;
+/// keyframe blend), with the time to prepare the surface after the last frame (mesh extraction). Prints
 /// tables and writes JSON.
 ///
 /// Usage: OMP_NUM_THREADS=1 fusion_bench [--scene small_office] [--frames 40] [--views 30]
@@ -167,18 +169,24 @@ nlohmann::json BenchRender(const std::string& label, const std::string& options,
 nlohmann::json BenchStages(const p2i::scene::RgbdDataset& train, const std::vector<p2i::scene::Pose>& test,
                            int w, int h) {
   const p2i::scene::RgbdDataset frames = p2i::scene::CenterCropResizeDataset(train, w, h);
-  struct Stage { std::string label; bool refine; int cracks; bool blend; };
-  const std::vector<Stage> stages = {{"open3d raycast", false, 0, false},
-                                     {"+ hit refinement", true, 0, false},
-                                     {"+ crack fill", true, 2, false},
-                                     {"+ keyframe blend", true, 2, true}};
+  struct Stage { std::string label; bool refine; int cracks; bool blend; std::string surface; };
+  const std::vector<Stage> stages = {{"open3d raycast", false, 0, false, "raycast"},
+                                     {"+ hit refinement", true, 0, false, "raycast"},
+                                     {"+ crack fill", true, 2, false, "raycast"},
+                                     {"+ keyframe blend", true, 2, true, "raycast"},
+                                     {"mesh raster", true, 2, false, "mesh"},
+                                     {"mesh + keyframe blend", true, 2, true, "mesh"}};
   nlohmann::json out = nlohmann::json::object();
   for (const Stage& st : stages) {
     p2i::fusion::FusionSceneOptions o;
     o.tsdf.refine_hits = st.refine;
     o.tsdf.crack_fill_passes = st.cracks;
+    o.tsdf.surface = st.surface;
     p2i::fusion::FusionScene scene(frames.camera, o);
     for (const auto& f : frames.frames) scene.AddFrame(f);
+    const auto p0 = Clock::now();
+    scene.tsdf().Prepare();  // the mesh of surface "mesh" (once per change of the volume)
+    const double prepare_ms = Ms(p0, Clock::now());
     auto once = [&](const p2i::scene::Pose& pose) {
       if (st.blend) scene.RenderCandidates(pose, frames.camera);
       else scene.tsdf().Raycast(pose, frames.camera);
@@ -191,8 +199,10 @@ nlohmann::json BenchStages(const p2i::scene::RgbdDataset& train, const std::vect
       ms.push_back(Ms(a, Clock::now()));
     }
     const double p50 = Median(ms);
-    std::printf("  stage %-18s %4dx%-4d %9.1f ms\n", st.label.c_str(), w, h, p50);
+    std::printf("  stage %-22s %4dx%-4d %9.1f ms   (prepare %.0f ms)\n", st.label.c_str(), w, h, p50,
+                prepare_ms);
     out[st.label] = p50;
+    out["prepare_ms " + st.label] = prepare_ms;
   }
   return out;
 }
@@ -220,8 +230,9 @@ int main(int argc, char** argv) {
     out["integration_block8"] = BenchIntegration(train, 8);
     std::printf("%-22s %9s %9s %9s %10s %9s\n", "row", "size", "p50_ms", "views/s", "build_ms", "observed");
     struct Row { std::string label, options; };
-    std::vector<Row> rows = {{"blend", "{}"},
-                             {"blend_no_refine_hits", "{tsdf: {refine_hits: false}}"},
+    std::vector<Row> rows = {{"blend (mesh)", "{}"},
+                             {"blend_raycast", "{tsdf: {surface: raycast}}"},
+                             {"blend_raycast_no_refine", "{tsdf: {surface: raycast, refine_hits: false}}"},
                              {"blend_block8", "{tsdf: {block_resolution: 8}}"}};
     if (!a.net.empty()) rows.push_back({"refined (zero-shot)", "{refine: {net: '" + a.net + "'}}"});
     const std::vector<std::pair<int, int>> sizes = {{128, 128}, {320, 240}};

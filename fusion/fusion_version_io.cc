@@ -67,6 +67,7 @@ LoadedFusionVersion LoadFusionVersion(const std::string& dir, FusionOptions opti
   FusionScene& fused = out.synthesizer->scene();
   fused.tsdf() = TsdfVolume::Load((fs::path(dir) / m.tsdf_file).string(), tsdf);
   for (size_t i = 0; i < m.keyframe_count; ++i) fused.AddFrame(keyframes.Load(i), /*integrate=*/false);
+  fused.tsdf().Prepare();  // the mesh now, in the loader's thread, not in the first view
   if (!m.refine_file.empty()) out.refine_path = fs::absolute(fs::path(dir) / m.refine_file).string();
   return out;
 }

@@ -40,7 +40,8 @@ struct LoadedFusionVersion {
 /// block resolution and truncation from the manifest, the rest of `options` the caller's) and
 /// the first keyframe_count frames of its keyframe capture as colour sources (not re-fused;
 /// every one kept). Output camera: the keyframes' camera centre-cropped and resized to width x
-/// height (0 x 0 = their own). No refiner is set. Throws std::runtime_error naming the folder
+/// height (0 x 0 = their own). The volume is prepared (TsdfVolume::Prepare: the mesh is built
+/// here, in the caller's thread). No refiner is set. Throws std::runtime_error naming the folder
 /// and what is missing (manifest, TSDF, keyframes).
 LoadedFusionVersion LoadFusionVersion(const std::string& dir, FusionOptions options, int width = 0,
                                       int height = 0);

@@ -27,21 +27,29 @@ struct TsdfOptions {
   /// SDF truncation in voxels (Open3D's trunc_voxel_multiplier): the band fused around each
   /// measured surface. Larger closes thin gaps, smaller keeps thin objects apart.
   double trunc_voxels = 4.0;
-  double depth_min_m = 0.1;       ///< raycast starts this far from the camera
+  double depth_min_m = 0.1;       ///< a view starts this far from the camera
   double depth_max_m = 5.0;       ///< measurements farther away are not integrated
-  /// Raycast: a zero crossing counts as a surface only where the fused weight (frames that saw
-  /// it) is above this (Open3D compares strictly: 0.5 accepts a surface seen once).
+  /// A zero crossing counts as a surface only where the fused weight (frames that saw it) is
+  /// above this (raycast and mesh extraction both; 0.5 accepts a surface seen once).
   double weight_threshold = 0.5;
-  /// Raycast cracks: Open3D's raycast leaves thin lines without a hit where the surface was
+  /// Surface "raycast" only. Raycast cracks: Open3D's raycast leaves thin lines without a hit where the surface was
   /// observed (along the silhouettes of objects in the frames that were fused). A pixel without a
   /// hit whose valid 8-neighbours (at least 3) agree within 5 % is marched along its own ray
   /// through their depth range (with refine_hits; else, or where that finds no crossing, it takes
   /// their mean depth) and takes their mean normal and colour, repeated this many passes (0 = off).
   int crack_fill_passes = 2;
-  /// Raycast: move each hit onto the zero crossing of the trilinearly read TSDF (TsdfField;
+  /// Surface "raycast" only: move each hit onto the zero crossing of the trilinearly read TSDF (TsdfField;
   /// Open3D's own crossing comes from nearest-voxel values and is off by up to a voxel along the
   /// ray). false = Open3D's depth as it is.
   bool refine_hits = true;
+  /// How a view finds the surface: "mesh" (SurfaceMesh: the TSDF's marching-cubes mesh, extracted
+  /// once after each change of the volume, z-buffered per view; refine_hits and crack_fill_passes
+  /// do not apply: its vertices lie on the trilinear crossing along voxel edges and it has no
+  /// cracks) or "raycast" (Open3D's RayCast with refine_hits and the crack fill). The mesh is the
+  /// default: 2-4x faster per view and as good or better in every bench run (docs/RESULTS.md
+  /// "A mesh instead of a raycast"); the raycast costs nothing after an Integrate, the mesh an
+  /// extraction (~0.8 s for a room) before the next view.
+  std::string surface = "mesh";
   /// OpenMP threads of Open3D's kernels (set in the calling thread before each call).
   int threads = 1;
   /// Reads the keys present in a YAML map (others keep their defaults), then Validate().
@@ -83,6 +91,11 @@ class TsdfVolume {
   /// Raycasts the fused surface seen from `pose` through `camera` (any size and intrinsics).
   /// An empty volume gives all-zero maps.
   TsdfRaycast Raycast(const scene::Pose& pose, const scene::CameraInfo& camera);
+
+  /// Builds what Raycast reuses between changes of the volume (the mesh of surface "mesh", the
+  /// trilinear field of refine_hits) now, so a caller that loads a volume in the background pays
+  /// for it there instead of in its first view. Optional.
+  void Prepare();
 
   TsdfStats Stats() const;
   const TsdfOptions& options() const { return options_; }
