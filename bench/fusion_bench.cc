@@ -12,6 +12,7 @@
 ///
 /// Usage: OMP_NUM_THREADS=1 fusion_bench [--scene small_office] [--frames 40] [--views 30]
 ///                                       [--net models/refine_sim.pt] [--json fusion_bench.json]
+///                                       [--stages-only]
 /// OMP_NUM_THREADS=1 makes Open3D's kernels and LibTorch use one thread (both read it at start).
 #include <algorithm>
 #include <chrono>
@@ -52,6 +53,7 @@ struct Args {
   int views = 30;   ///< test poses on the adjacent sweep
   std::string net;  ///< refinement file ("" = no refined rows)
   std::string json = "fusion_bench.json";
+  bool stages_only = false;  ///< only the stage breakdown (for a profiler)
 };
 
 bool ParseArgs(int argc, char** argv, Args* a) {
@@ -68,6 +70,8 @@ bool ParseArgs(int argc, char** argv, Args* a) {
       a->net = argv[++i];
     } else if (k == "--json" && has) {
       a->json = argv[++i];
+    } else if (k == "--stages-only") {
+      a->stages_only = true;
     } else {
       return false;
     }
@@ -213,7 +217,7 @@ int main(int argc, char** argv) {
   Args a;
   if (!ParseArgs(argc, argv, &a)) {
     std::cerr << "usage: OMP_NUM_THREADS=1 fusion_bench [--scene NAME] [--frames N] [--views N] "
-                 "[--net FILE] [--json FILE]\n";
+                 "[--net FILE] [--json FILE] [--stages-only]\n";
     return 2;
   }
   try {
@@ -226,19 +230,21 @@ int main(int argc, char** argv) {
     nlohmann::json out;
     out["scene"] = a.scene;
     out["omp_num_threads"] = omp ? omp : "";
-    out["integration"] = BenchIntegration(train, 16);  // TsdfOptions' default
-    out["integration_block8"] = BenchIntegration(train, 8);
-    std::printf("%-22s %9s %9s %9s %10s %9s\n", "row", "size", "p50_ms", "views/s", "build_ms", "observed");
-    struct Row { std::string label, options; };
-    std::vector<Row> rows = {{"blend (mesh)", "{}"},
-                             {"blend_raycast", "{tsdf: {surface: raycast}}"},
-                             {"blend_raycast_no_refine", "{tsdf: {surface: raycast, refine_hits: false}}"},
-                             {"blend_block8", "{tsdf: {block_resolution: 8}}"}};
-    if (!a.net.empty()) rows.push_back({"refined (zero-shot)", "{refine: {net: '" + a.net + "'}}"});
     const std::vector<std::pair<int, int>> sizes = {{128, 128}, {320, 240}};
-    for (const auto& size : sizes)
-      for (const Row& r : rows)
-        out["render"].push_back(BenchRender(r.label, r.options, train, test, size.first, size.second));
+    if (!a.stages_only) {
+      out["integration"] = BenchIntegration(train, 16);  // TsdfOptions' default
+      out["integration_block8"] = BenchIntegration(train, 8);
+      std::printf("%-22s %9s %9s %9s %10s %9s\n", "row", "size", "p50_ms", "views/s", "build_ms", "observed");
+      struct Row { std::string label, options; };
+      std::vector<Row> rows = {{"blend (mesh)", "{}"},
+                               {"blend_raycast", "{tsdf: {surface: raycast}}"},
+                               {"blend_raycast_no_refine", "{tsdf: {surface: raycast, refine_hits: false}}"},
+                               {"blend_block8", "{tsdf: {block_resolution: 8}}"}};
+      if (!a.net.empty()) rows.push_back({"refined (zero-shot)", "{refine: {net: '" + a.net + "'}}"});
+      for (const auto& size : sizes)
+        for (const Row& r : rows)
+          out["render"].push_back(BenchRender(r.label, r.options, train, test, size.first, size.second));
+    }
     std::printf("stages (median ms per view, cumulative):\n");
     for (const auto& size : sizes)
       out["stages_ms_p50"][std::to_string(size.first) + "x" + std::to_string(size.second)] =
