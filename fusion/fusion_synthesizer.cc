@@ -97,10 +97,18 @@ std::vector<scene::RgbdSample> FusionSynthesizer::RenderBatch(const std::vector<
   return out;
 }
 
+namespace {
+/// The peer is Open3D's own way to see a TSDF: its raycast, whatever the surface option says.
+TsdfOptions RaycastSurface(TsdfOptions o) {
+  o.surface = "raycast";
+  return o;
+}
+}  // namespace
+
 Open3dTsdfSynthesizer::Open3dTsdfSynthesizer(const scene::RgbdDataset& training, FusionOptions options,
                                              std::optional<scene::CameraInfo> output_camera)
     : options_(options),
-      tsdf_(options.scene.tsdf),
+      tsdf_(RaycastSurface(options.scene.tsdf)),
       frame_camera_(training.camera),
       output_camera_(output_camera ? *output_camera : training.camera) {
   CheckCamera(frame_camera_, "Open3dTsdfSynthesizer training");

@@ -78,7 +78,8 @@ class FusionSynthesizer : public model::ViewSynthesizer {
 };
 
 /// `open3d_tsdf`: what a user of Open3D would pick: the same TSDF, rendered by its own raycast of
-/// depth and interpolated voxel colour (no keyframes). Holes filled like fusion's.
+/// depth and interpolated voxel colour (no keyframes; TsdfOptions::surface is always "raycast"
+/// here, with the hit refinement and crack fill as configured). Holes filled like fusion's.
 class Open3dTsdfSynthesizer : public model::ViewSynthesizer {
  public:
   Open3dTsdfSynthesizer(const scene::RgbdDataset& training, FusionOptions options = {},

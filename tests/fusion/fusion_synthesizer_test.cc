@@ -149,6 +149,19 @@ TEST_CASE("open3d_tsdf: renders the scene and depends on the pose", "[unit]") {
   CHECK(model::Psnr(va.rgb, vb.rgb) < 20.0);                 // different views
   CHECK(model::Psnr(va.rgb, a.rgb) > model::Psnr(vb.rgb, a.rgb) + 3.0);  // and the right one
   CHECK(model::ComputeDepthErrors(va.depth, a.depth).abs_rel < 0.03);
+  // It is Open3D's raycast (not the mesh fusion renders by default): same depth where it hit.
+  TsdfOptions ray;
+  ray.surface = "raycast";
+  TsdfVolume vol(ray);
+  for (const auto& f : train.frames) vol.Integrate(f, train.camera);
+  const cv::Mat hit = vol.Raycast(a.pose, train.camera).depth;
+  REQUIRE(cv::countNonZero(hit) > 0);
+  double worst = 0.0;
+  for (int v = 0; v < hit.rows; ++v)
+    for (int u = 0; u < hit.cols; ++u)
+      if (hit.at<float>(v, u) > 0.0f)
+        worst = std::max(worst, static_cast<double>(std::abs(hit.at<float>(v, u) - va.depth.at<float>(v, u))));
+  CHECK(worst < 1e-6);
 }
 
 }  // namespace
