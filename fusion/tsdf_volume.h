@@ -46,9 +46,10 @@ struct TsdfOptions {
   /// once after each change of the volume, z-buffered per view; refine_hits and crack_fill_passes
   /// do not apply: its vertices lie on the trilinear crossing along voxel edges and it has no
   /// cracks) or "raycast" (Open3D's RayCast with refine_hits and the crack fill). The mesh is the
-  /// default: 2-4x faster per view and as good or better in every bench run (docs/RESULTS.md
-  /// "A mesh instead of a raycast"); the raycast costs nothing after an Integrate, the mesh an
-  /// extraction (~0.8 s for a room) before the next view.
+  /// default: 2-4x faster per view, better on the small office and study-room, 0.29 dB worse on
+  /// two settings of the specular large office (docs/RESULTS.md "A mesh instead of a raycast");
+  /// the raycast costs nothing after an Integrate, the mesh an extraction (~0.8 s for a room)
+  /// before the next view.
   std::string surface = "mesh";
   /// OpenMP threads of Open3D's kernels (set in the calling thread before each call).
   int threads = 1;
