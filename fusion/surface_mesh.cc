@@ -10,6 +10,8 @@
 #include <string>
 #include <unordered_map>
 
+#include "fusion/frustum.h"
+
 namespace p2i::fusion {
 namespace {
 
@@ -135,14 +137,9 @@ void SurfaceMesh::CullAndTransform(View* view) const {
   v.offset.assign(chunks_.size(), -1);
   for (size_t ci = 0; ci < chunks_.size(); ++ci) {
     const Chunk& ch = chunks_[ci];
-    const Eigen::Vector3f pc = v.r * ch.centre + v.t;
-    const float rad = ch.radius;
-    if (pc.z() < v.depth_min - rad || pc.z() > v.depth_max + rad) continue;
-    if (pc.z() > rad) {
-      const float u = v.fx * pc.x() / pc.z() + v.cx, y = v.fy * pc.y() / pc.z() + v.cy;
-      const float mu = v.fx * rad / (pc.z() - rad) + 1.0f, mv = v.fy * rad / (pc.z() - rad) + 1.0f;
-      if (u < -mu || u > v.w + mu || y < -mv || y > v.h + mv) continue;
-    }
+    if (!SphereMayBeInView(Eigen::Vector3f(v.r * ch.centre + v.t), ch.radius, v.depth_min, v.depth_max,
+                           v.fx, v.fy, v.cx, v.cy, v.w, v.h))
+      continue;
     v.offset[ci] = static_cast<int64_t>(v.verts.size());
     v.visible.push_back(static_cast<int32_t>(ci));
     for (int64_t i = ch.vertex_begin; i < ch.vertex_end; ++i) {

@@ -34,6 +34,7 @@
 #include <open3d/t/geometry/VoxelBlockGrid.h>
 #undef private
 
+#include "fusion/frustum.h"
 #include "fusion/surface_mesh.h"
 #include "fusion/tsdf_field.h"
 #include "scene/strict_yaml_reader.h"
@@ -328,15 +329,9 @@ std::vector<int> FrustumBlocks(const int* kp, int64_t n, const TsdfOptions& o, c
   for (int64_t i = 0; i < n; ++i) {
     const Eigen::Vector3d centre((kp[3 * i] + 0.5) * block, (kp[3 * i + 1] + 0.5) * block,
                                  (kp[3 * i + 2] + 0.5) * block);
-    const Eigen::Vector3d pc = r * centre + t;
-    if (pc.z() < -radius || pc.z() > o.depth_max_m + radius) continue;
-    if (pc.z() > radius) {
-      const double u = camera.fx() * pc.x() / pc.z() + camera.cx();
-      const double v = camera.fy() * pc.y() / pc.z() + camera.cy();
-      const double mu = camera.fx() * radius / (pc.z() - radius) + 1.0;
-      const double mv = camera.fy() * radius / (pc.z() - radius) + 1.0;
-      if (u < -mu || u > w + mu || v < -mv || v > h + mv) continue;
-    }
+    if (!SphereMayBeInView(Eigen::Vector3d(r * centre + t), radius, 0.0, o.depth_max_m, camera.fx(),
+                           camera.fy(), camera.cx(), camera.cy(), w, h))
+      continue;
     selected.insert(selected.end(), {kp[3 * i], kp[3 * i + 1], kp[3 * i + 2]});
   }
   return selected;
