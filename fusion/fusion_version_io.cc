@@ -26,6 +26,7 @@ std::string WriteSceneVersion(const std::string& versions_dir, FusionScene& scen
   m.block_resolution = tsdf.block_resolution;
   m.trunc_voxels = tsdf.trunc_voxels;
   m.refine_file = info.refine_source.empty() ? "" : "refine.pt";
+  m.step = info.refine_steps;
   const std::string dir = model::FusionVersionDir(versions_dir, info.version);
   fs::create_directories(versions_dir);
   model::WriteFusionVersion(dir, m, [&](const std::string& temp) {

@@ -21,6 +21,7 @@ struct FusionVersionInfo {
   std::string keyframes_dir;    ///< the mapper's append-only keyframe capture folder
   uint64_t keyframe_count = 0;  ///< its first frames that belong to this version
   std::string refine_source;    ///< a refinement file copied into the version ("" = none)
+  int64_t refine_steps = 0;     ///< optimiser steps it has seen (the manifest's `step`)
 };
 
 /// Writes `scene`'s TSDF (and the refinement file, when named) as the committed version folder

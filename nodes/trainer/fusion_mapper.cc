@@ -2,6 +2,7 @@
 /// @brief FusionMapper: the mapping thread (queue -> TSDF + keyframes -> versions).
 #include "nodes/trainer/fusion_mapper.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -31,6 +32,20 @@ void FusionMapperOptions::Validate() const {
   if (!refine_net.empty() && !fs::is_regular_file(refine_net))
     fail("refine_net: no file '" + refine_net + "' (a `p2i refine train-sim` output such as "
          "models/refine_sim.pt, or '' for none)");
+  if (refine_finetune_steps < 0)
+    fail("refine_finetune_steps must be >= 0, got " + std::to_string(refine_finetune_steps));
+  if (refine_finetune_steps > 0) TunerOptions().Validate();
+}
+
+RefineTunerOptions FusionMapperOptions::TunerOptions() const {
+  RefineTunerOptions t;
+  t.net = refine_net;
+  t.scene = scene;
+  t.steps_per_round = refine_finetune_steps;
+  t.window_keyframes = refine_window_keyframes;
+  t.view_width = refine_view_width;
+  t.out_dir = (fs::path(work_dir) / "refine").string();
+  return t;
 }
 
 FusionMapper::FusionMapper(FusionMapperOptions options, VersionCallback on_version)
@@ -46,6 +61,8 @@ FusionMapper::FusionMapper(FusionMapperOptions options, VersionCallback on_versi
   std::snprintf(name, sizeof(name), "keyframes_s%06llu",
                 static_cast<unsigned long long>(next_version_));
   keyframes_dir_ = (fs::absolute(options_.work_dir) / name).string();
+  if (options_.refine_finetune_steps > 0)
+    tuner_ = std::make_unique<RefineTuner>(options_.TunerOptions());
   thread_ = std::thread([this] { Run(); });
 }
 
@@ -74,11 +91,23 @@ void FusionMapper::Stop() {
   }
   cv_.notify_all();
   if (thread_.joinable()) thread_.join();
+  if (tuner_) tuner_->Stop();
 }
 
 FusionMapper::Stats FusionMapper::GetStats() const {
-  std::lock_guard<std::mutex> lock(mutex_);
-  return stats_;
+  Stats st;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    st = stats_;
+  }
+  if (tuner_) {
+    const RefineTuner::Stats t = tuner_->GetStats();
+    st.refine_rounds = t.rounds;
+    st.refine_steps = t.total_steps;
+    st.refine_loss = t.last_loss;
+    st.refine_error = t.last_error;
+  }
+  return st;
 }
 
 void FusionMapper::Run() {
@@ -86,8 +115,20 @@ void FusionMapper::Run() {
     Job job;
     {
       std::unique_lock<std::mutex> lock(mutex_);
-      cv_.wait(lock, [this] { return stopping_ || !queue_.empty(); });
-      if (queue_.empty()) break;  // stopping, everything queued integrated
+      // With online fine-tuning, wake now and then: a net finished after the last version goes
+      // out in a version of its own when no frame comes (a robot standing still, offline data).
+      const auto ready = [this] { return stopping_ || !queue_.empty(); };
+      if (tuner_) {
+        cv_.wait_for(lock, std::chrono::milliseconds(200), ready);
+      } else {
+        cv_.wait(lock, ready);
+      }
+      if (queue_.empty()) {
+        if (stopping_) break;  // everything queued integrated
+        lock.unlock();
+        if (scene_ && tuner_->LatestNet().steps > published_refine_steps_) Publish();
+        continue;
+      }
       job = std::move(queue_.front());
       queue_.pop_front();
     }
@@ -137,6 +178,15 @@ void FusionMapper::Publish() {
   info.keyframes_dir = keyframes_dir_;
   info.keyframe_count = keyframes_->size();
   info.refine_source = options_.refine_net;
+  if (tuner_) {
+    const RefineTuner::Net net = tuner_->LatestNet();
+    if (!net.path.empty()) {
+      info.refine_source = net.path;
+      info.refine_steps = net.steps;
+    }
+    // Offered below only when new keyframes came since the last offer: a version for a new net
+    // alone (no new frame) would otherwise start a round on the same keyframes, for ever.
+  }
   {
     std::lock_guard<std::mutex> lock(mutex_);
     info.frames_integrated = stats_.integrated;
@@ -150,13 +200,21 @@ void FusionMapper::Publish() {
     return;  // retried after the next publish_every_frames frames
   }
   ++next_version_;
+  const bool new_frames = unpublished_ > 0;
   unpublished_ = 0;
+  published_refine_steps_ = info.refine_steps;
   {
     std::lock_guard<std::mutex> lock(mutex_);
     ++stats_.versions;
     stats_.last_version = info.version;
   }
   Prune();
+  if (tuner_ && new_frames) {  // the next round tunes on the keyframes of this version
+    const auto& all = scene_->keyframes();
+    const size_t n = std::min(all.size(), static_cast<size_t>(options_.refine_window_keyframes));
+    tuner_->Offer(std::vector<scene::RgbdSample>(all.end() - static_cast<std::ptrdiff_t>(n), all.end()),
+                  scene_->frame_camera());
+  }
   if (on_version_) on_version_(model::ReadFusionVersion(dir), dir);
 }
 

@@ -16,6 +16,7 @@
 
 #include "fusion/fusion_scene.h"
 #include "model/fusion_version.h"
+#include "nodes/trainer/refine_tuner.h"
 #include "scene/camera_info.h"
 #include "scene/rgbd_sample.h"
 
@@ -41,8 +42,17 @@ struct FusionMapperOptions {
   int queue_frames = 2;
   /// A refinement file (`p2i refine train-sim` output) copied into every version; "" = none.
   std::string refine_net;
+  /// > 0: the refinement (refine_net, or a fresh net when "") is fine-tuned online on its own
+  /// thread (refine_tuner.h), this many Adam steps per round, one round per published version
+  /// on the newest keyframes; each version carries the newest fine-tuned net (refine_net until
+  /// the first round has finished). 0 = refine_net as it is.
+  int refine_finetune_steps = 0;
+  int refine_window_keyframes = 48;  ///< RefineTunerOptions::window_keyframes
+  int refine_view_width = 160;       ///< RefineTunerOptions::view_width
   /// Throws std::invalid_argument naming the field.
   void Validate() const;
+  /// The fine-tuning's options: refine_net, scene, refine_* and the nets' folder work_dir/refine.
+  RefineTunerOptions TunerOptions() const;
 };
 
 /// Thread-safety: Submit and GetStats from any thread; integration and version writing run on
@@ -63,6 +73,11 @@ class FusionMapper {
     uint64_t last_version = 0;
     double last_integrate_ms = 0.0;
     std::string last_error;    ///< of the last rejected frame or failed version write
+    // Online fine-tuning of the refinement (refine_finetune_steps > 0; else all 0):
+    uint64_t refine_rounds = 0;       ///< rounds finished
+    int64_t refine_steps = 0;         ///< Adam steps the newest fine-tuned net has seen
+    double refine_loss = 0.0;         ///< the last round's loss over its last steps
+    std::string refine_error;         ///< why the last offer was not tuned ("" after a round)
   };
 
   /// Starts the mapping thread. Version numbers continue after the highest committed one in
@@ -75,7 +90,8 @@ class FusionMapper {
   /// With `wait`, blocks while the queue is full instead of dropping (offline data).
   void Submit(scene::RgbdSample frame, const scene::CameraInfo& camera, bool wait = false);
   /// Integrates what is queued, writes a last version when frames were integrated since the
-  /// previous one, and ends the thread. Idempotent.
+  /// previous one, and ends the thread (and the fine-tuning's: a round in progress is dropped).
+  /// Idempotent.
   void Stop();
   Stats GetStats() const;
   const std::string& VersionsDir() const { return versions_dir_; }
@@ -105,6 +121,8 @@ class FusionMapper {
   // Mapping thread only.
   std::unique_ptr<fusion::FusionScene> scene_;
   std::unique_ptr<scene::CaptureWriter> keyframes_;
+  std::unique_ptr<RefineTuner> tuner_;  // set when refine_finetune_steps > 0
+  int64_t published_refine_steps_ = 0;  // of the fine-tuned net in the newest version
   uint64_t unpublished_ = 0;
   std::thread thread_;
 };

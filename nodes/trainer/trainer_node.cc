@@ -117,11 +117,19 @@ void TrainerNode::StartMapper(TrainerNodeOptions& options, const std::string& wo
         v.set_height(static_cast<uint32_t>(m.height));
         version_pub_->Publish(v);
         Count("versions_published");
-        Log().info("fusion version {} ({} frames integrated, {} keyframes): {}", m.version,
-                   m.frames_integrated, m.keyframe_count, dir);
+        Log().info("fusion version {} ({} frames integrated, {} keyframes, refinement: {}): {}",
+                   m.version, m.frames_integrated, m.keyframe_count,
+                   m.refine_file.empty() ? std::string("none")
+                                         : std::to_string(m.step) + " fine-tuning steps",
+                   dir);
       });
   Log().info("method fusion: mapping online, a version every {} integrated frames into {}",
              mo.publish_every_frames, mapper_->VersionsDir());
+  mapper_refines_ = mo.refine_finetune_steps > 0;
+  if (mapper_refines_)
+    Log().info("refinement fine-tuned online: {} steps per version on the newest {} keyframes, "
+               "from {}", mo.refine_finetune_steps, mo.refine_window_keyframes,
+               mo.refine_net.empty() ? std::string("a fresh net") : mo.refine_net);
   if (!options.dataset.empty()) {
     const scene::DatasetIndex index = scene::OpenDataset(options.dataset);
     for (size_t i = 0; i < index.size(); ++i)
@@ -144,6 +152,15 @@ void TrainerNode::PublishMapperStatus() {
   SetValue("frames_dropped_busy", static_cast<double>(st.dropped));
   SetValue("frames_rejected", static_cast<double>(st.rejected));
   SetValue("integrate_ms", st.last_integrate_ms);
+  if (mapper_refines_) {
+    SetValue("refine_rounds", static_cast<double>(st.refine_rounds));
+    SetValue("refine_steps", static_cast<double>(st.refine_steps));
+    SetValue("refine_loss", st.refine_loss);
+    if (st.refine_error != last_refine_error_) {
+      last_refine_error_ = st.refine_error;
+      if (!st.refine_error.empty()) Log().info("refinement fine-tuning: {}", st.refine_error);
+    }
+  }
   if (st.last_error != last_mapper_error_) {
     last_mapper_error_ = st.last_error;
     Log().warn("mapping: {}", st.last_error);
@@ -210,6 +227,9 @@ void TrainerNode::OnShutdown() {
     const FusionMapper::Stats st = mapper_->GetStats();
     Log().info("mapping stopped: {} frames integrated, {} keyframes, {} dropped while busy, last "
                "version {}", st.integrated, st.keyframes, st.dropped, st.last_version);
+    if (mapper_refines_)
+      Log().info("refinement fine-tuning stopped: {} rounds, {} steps, last loss {:.4f}",
+                 st.refine_rounds, st.refine_steps, st.refine_loss);
     return;
   }
   if (!loop_) return;

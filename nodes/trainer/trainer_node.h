@@ -50,6 +50,8 @@ class TrainerNode : public runtime::Node {
   std::unique_ptr<TrainingLoop> loop_;
   std::unique_ptr<FusionMapper> mapper_;  ///< method fusion (then no buffer_ and no loop_)
   std::string last_mapper_error_;         ///< logged once per new mapping error
+  bool mapper_refines_ = false;           ///< method fusion with refine_finetune_steps > 0
+  std::string last_refine_error_;         ///< logged once per new fine-tuning message
   std::shared_ptr<runtime::Publisher<msgs::pb::ModelVersion>> version_pub_;
   std::shared_ptr<runtime::Publisher<msgs::pb::TrainerStatus>> status_pub_;
   std::shared_ptr<runtime::RawSubscriber> frame_sub_;

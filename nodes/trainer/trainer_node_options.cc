@@ -65,6 +65,16 @@ void DeclareMapper(runtime::Parameters& p, FusionMapperOptions* o) {
   o->refine_net = p.Declare<std::string>(
       "refine_net", o->refine_net,
       "method fusion: refinement file copied into every version ('' = plain blend)");
+  o->refine_finetune_steps = p.Declare<int>(
+      "refine_finetune_steps", o->refine_finetune_steps,
+      "method fusion: > 0 fine-tunes the refinement (refine_net, or a fresh net) online, this "
+      "many Adam steps per version on the newest keyframes (0 = refine_net as it is)");
+  o->refine_window_keyframes = p.Declare<int>(
+      "refine_window_keyframes", o->refine_window_keyframes,
+      "method fusion: the newest keyframes a fine-tuning round renders leave-one-out");
+  o->refine_view_width = p.Declare<int>(
+      "refine_view_width", o->refine_view_width,
+      "method fusion: fine-tuning samples are rendered at the camera scaled to this width");
 }
 
 }  // namespace
@@ -115,6 +125,12 @@ void TrainerNodeOptions::Validate() const {
                 mapper.keep_seconds, "be finite and >= 0", "e.g. keep_seconds:=10");
     CheckOption(mapper.queue_frames >= 1, n, "queue_frames", mapper.queue_frames, "be >= 1",
                 "e.g. queue_frames:=2");
+    CheckOption(mapper.refine_finetune_steps >= 0, n, "refine_finetune_steps",
+                mapper.refine_finetune_steps, "be >= 0", "e.g. refine_finetune_steps:=100");
+    CheckOption(mapper.refine_window_keyframes >= 2, n, "refine_window_keyframes",
+                mapper.refine_window_keyframes, "be >= 2", "e.g. refine_window_keyframes:=48");
+    CheckOption(mapper.refine_view_width >= 16, n, "refine_view_width", mapper.refine_view_width,
+                "be >= 16", "e.g. refine_view_width:=160");
   }
   CheckOption(resolution >= 0, n, "resolution", resolution, "be >= 0",
               "resolution:=0 keeps the config's");

@@ -1,15 +1,18 @@
 /// @file fusion_mapper_test.cc
 /// @brief The trainer node's online mapping (method fusion): versions every N integrated frames,
 /// a last one at Stop, pruning, numbering across restarts, a changed camera refused, a full
-/// queue dropping (counted), and every version loadable by the synthesizer's side.
+/// queue dropping (counted), every version loadable by the synthesizer's side, and the online
+/// fine-tuning of the refinement (refine_tuner.h) carried by the versions.
 #include <catch2/catch.hpp>
 
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <thread>
 
 #include "fusion/fusion_version_io.h"
 #include "model/metrics.h"
+#include "model/refiner.h"
 #include "nodes/trainer/fusion_mapper.h"
 #include "tests/trainer/trainer_test_util.h"
 
@@ -124,6 +127,105 @@ TEST_CASE("fusion mapper: another camera is refused, a full queue drops the olde
   bad = Options(dir);
   bad.keep_seconds = -1.0;
   CHECK_THROWS_WITH(FusionMapper(bad, nullptr), Catch::Contains("keep_seconds must be finite and >= 0"));
+}
+
+TEST_CASE("fusion mapper: the refinement is fine-tuned online and carried by the next version",
+          "[unit]") {
+  const std::string dir = testing::TempDir("fusion_mapper_refine");
+  const scene::RgbdDataset frames = testing::SimFrames(12);
+  Published published;
+  FusionMapperOptions o = Options(dir);
+  o.publish_every_frames = 4;
+  o.refine_finetune_steps = 3;
+  o.refine_window_keyframes = 8;
+  FusionMapper mapper(o, published.Callback());
+  // Version 1 (4 keyframes: fewer than min_keyframes 8, the offer is skipped), version 2 (8).
+  for (size_t i = 0; i < 8; ++i) mapper.Submit(frames.frames[i], frames.camera, true);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
+  while (mapper.GetStats().refine_rounds == 0 && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  REQUIRE(mapper.GetStats().refine_rounds == 1);
+  // No frame comes: the new net goes out in a version of its own (same map, 8 frames).
+  while (mapper.GetStats().versions < 3 && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  REQUIRE(mapper.GetStats().versions == 3);
+  for (size_t i = 8; i < 12; ++i) mapper.Submit(frames.frames[i], frames.camera, true);
+  mapper.Stop();
+  const FusionMapper::Stats st = mapper.GetStats();
+  CHECK(st.versions == 4);
+  CHECK(st.refine_steps >= 3);  // a second round (12 keyframes) may have finished before Stop
+  CHECK(std::isfinite(st.refine_loss));
+  CHECK(st.refine_loss > 0.0);
+  REQUIRE(published.dirs.size() == 4);
+  // Versions before the first round carry no net (refine_net is ""), the ones after it do, with
+  // the net's step count in the manifest.
+  CHECK(published.manifests[0].refine_file.empty());
+  CHECK(published.manifests[1].refine_file.empty());
+  CHECK(published.manifests[2].refine_file == "refine.pt");
+  CHECK(published.manifests[2].step == 3);
+  CHECK(published.manifests[2].frames_integrated == 8);
+  CHECK(published.manifests[3].step == 3);
+  CHECK(published.manifests[3].frames_integrated == 12);
+  const fusion::LoadedFusionVersion v4 = fusion::LoadFusionVersion(published.dirs[3], {});
+  REQUIRE_FALSE(v4.refine_path.empty());
+  CHECK(fs::path(v4.refine_path).parent_path() == fs::path(published.dirs[3]));  // a copy
+  CHECK(model::Refiner::Load(v4.refine_path)->total_steps() == 3);
+  CHECK(model::Refiner::Load(dir + "/refine/online_refine_000001.pt")->total_steps() == 3);
+
+  FusionMapperOptions bad = Options(dir);
+  bad.refine_finetune_steps = -1;
+  CHECK_THROWS_WITH(FusionMapper(bad, nullptr), Catch::Contains("refine_finetune_steps must be >= 0"));
+  bad.refine_finetune_steps = 5;
+  bad.refine_view_width = 4;
+  CHECK_THROWS_WITH(FusionMapper(bad, nullptr), Catch::Contains("view_width must be >= 16"));
+}
+
+TEST_CASE("refine tuner: too few keyframes are skipped, a round stops at Stop and writes nothing",
+          "[unit]") {
+  const std::string dir = testing::TempDir("refine_tuner");
+  const scene::RgbdDataset frames = testing::SimFrames(10);
+  RefineTunerOptions o;
+  o.out_dir = dir + "/nets";
+  o.min_keyframes = 4;
+  o.steps_per_round = 2;
+  {
+    RefineTuner tuner(o);
+    tuner.Offer({frames.frames.begin(), frames.frames.begin() + 3}, frames.camera);
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+    while (tuner.GetStats().offers_skipped == 0 && std::chrono::steady_clock::now() < deadline)
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    CHECK(tuner.GetStats().offers_skipped == 1);
+    CHECK_THAT(tuner.GetStats().last_error, Catch::Contains("fewer than min_keyframes 4"));
+    CHECK(tuner.LatestNet().path.empty());
+    // Three rounds: the step count carries on; a round's file, and the one before it, stay.
+    for (uint64_t r = 1; r <= 3; ++r) {
+      tuner.Offer(frames.frames, frames.camera);
+      REQUIRE(tuner.WaitForRounds(r, 120.0));
+    }
+    CHECK(tuner.LatestNet().path == o.out_dir + "/online_refine_000003.pt");
+    CHECK(tuner.LatestNet().steps == 6);
+    CHECK(tuner.GetStats().total_steps == 6);
+    CHECK(tuner.GetStats().last_error.empty());
+    CHECK(model::Refiner::Load(tuner.LatestNet().path)->total_steps() == 6);
+    CHECK(model::Refiner::Load(o.out_dir + "/online_refine_000002.pt")->total_steps() == 4);
+    CHECK_FALSE(fs::exists(o.out_dir + "/online_refine_000001.pt"));
+  }
+  // A round far too long to finish: Stop ends it between two steps, and no file is written.
+  o.out_dir = dir + "/long";
+  o.steps_per_round = 1000000;
+  RefineTuner tuner(o);
+  tuner.Offer(frames.frames, frames.camera);
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  tuner.Stop();
+  CHECK(tuner.GetStats().rounds == 0);
+  CHECK(fs::is_empty(o.out_dir));
+
+  RefineTunerOptions bad = o;
+  bad.net = dir + "/missing.pt";
+  CHECK_THROWS_WITH(RefineTuner(bad), Catch::Contains("net: no file"));
+  bad = o;
+  bad.steps_per_round = 0;
+  CHECK_THROWS_WITH(RefineTuner(bad), Catch::Contains("steps_per_round must be >= 1"));
 }
 
 }  // namespace p2i::trainer

@@ -80,6 +80,11 @@ TEST_CASE("TrainerNodeOptions::Validate refuses each bad value, naming parameter
           {{{"method", "fusion"}, {"keep_versions", "0"}}, "keep_versions must be >= 1 (got 0)"},
           {{{"method", "fusion"}, {"keep_seconds", "-1"}}, "keep_seconds must be finite and >= 0 (got -1)"},
           {{{"method", "fusion"}, {"queue_frames", "0"}}, "queue_frames must be >= 1 (got 0)"},
+          {{{"method", "fusion"}, {"refine_finetune_steps", "-1"}},
+           "refine_finetune_steps must be >= 0 (got -1)"},
+          {{{"method", "fusion"}, {"refine_window_keyframes", "1"}},
+           "refine_window_keyframes must be >= 2 (got 1)"},
+          {{{"method", "fusion"}, {"refine_view_width", "8"}}, "refine_view_width must be >= 16 (got 8)"},
           {{{"method", "fusion"}, {"world_size", "2"}, {"master", "127.0.0.1:29500"}},
            "world_size must be 1 with method fusion (got 2)"},
       });
@@ -91,13 +96,19 @@ TEST_CASE("TrainerNodeOptions: method fusion reads the mapper's parameters", "[u
        {"fusion_options", "{tsdf: {voxel_size_m: 0.04}, blend: {keyframe_min_distance: 0.1}}"},
        {"publish_every_frames", "12"},
        {"keep_versions", "4"},
-       {"keep_seconds", "2.5"}});
+       {"keep_seconds", "2.5"},
+       {"refine_finetune_steps", "50"},
+       {"refine_window_keyframes", "24"},
+       {"refine_view_width", "128"}});
   CHECK(o.method == "fusion");
   CHECK(o.mapper.scene.tsdf.voxel_size_m == 0.04);
   CHECK(o.mapper.scene.blend.keyframe_min_distance == 0.1);
   CHECK(o.mapper.publish_every_frames == 12);
   CHECK(o.mapper.keep_versions == 4);
   CHECK(o.mapper.keep_seconds == 2.5);
+  CHECK(o.mapper.refine_finetune_steps == 50);
+  CHECK(o.mapper.refine_window_keyframes == 24);
+  CHECK(o.mapper.refine_view_width == 128);
   CHECK_NOTHROW(o.Validate());
   // A bad key in fusion_options stops at start-up, naming the parameter and the key.
   CHECK_THROWS_WITH(OptionsFrom<TrainerNodeOptions>({{"fusion_options", "{tsdf: {voxel: 0.1}}"}}),
