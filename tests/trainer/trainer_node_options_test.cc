@@ -15,13 +15,14 @@ namespace {
 using namespace p2i::testing;
 
 TEST_CASE("TrainerNodeOptions: declared defaults are the field initialisers", "[unit]") {
-  const runtime::Parameters p = CheckDefaults<TrainerNodeOptions>(27);
+  const runtime::Parameters p = CheckDefaults<TrainerNodeOptions>(30);
   const TrainingLoop::Options loop;
   CHECK(p.Declared().at("buffer_mb").default_text == "256");  // ReplayBuffer::Options'
   CHECK(p.Declared().at("publish_every_steps").default_text ==
         std::to_string(loop.steps_per_round));
   CHECK(p.Declared().at("min_frames").default_text == std::to_string(loop.min_frames));
   CHECK(p.Declared().at("enet_steps_per_version").default_text == "-1");
+  CHECK(p.Declared().at("refine_finetune_steps").default_text == "0");  // off unless asked
   CHECK(TrainerNodeOptions().Loop().min_frames == loop.min_frames);
   // One process unless asked: world_size 1 is today's single-process node.
   CHECK(p.Declared().at("world_size").default_text == "1");
