@@ -2,7 +2,8 @@
 /// @brief Speed and memory of the `fusion` method (issue 12's speed targets): TSDF integration
 /// time per camera frame (against a 30 Hz camera's 33.3 ms) with blocks of 16^3 (the default) and
 /// 8^3 voxels, render time per view at 128x128 and 320x240 with the default surface (the TSDF's
-/// mesh), with the raycast (hit refinement on and off), with 8^3 blocks and with the learned
+/// mesh, bicubic keyframe reads), with bilinear reads, with the raycast (hit refinement on and
+/// off), with 8^3 blocks and with the learned
 /// refinement, and the fused scene's memory per m^3 of
 /// allocated blocks. The method is built through the method registry,
 /// as `p2i bench` and the synthesizer build it; transport is not included (pipeline_bench has
@@ -237,6 +238,7 @@ int main(int argc, char** argv) {
       std::printf("%-22s %9s %9s %9s %10s %9s\n", "row", "size", "p50_ms", "views/s", "build_ms", "observed");
       struct Row { std::string label, options; };
       std::vector<Row> rows = {{"blend (mesh)", "{}"},
+                               {"blend_bilinear", "{blend: {sampling: bilinear}}"},
                                {"blend_raycast", "{tsdf: {surface: raycast}}"},
                                {"blend_raycast_no_refine", "{tsdf: {surface: raycast, refine_hits: false}}"},
                                {"blend_block8", "{tsdf: {block_resolution: 8}}"}};

@@ -12,6 +12,7 @@
 
 #include <Eigen/Geometry>
 
+#include "fusion/keyframe_sampling.h"
 #include "model/coverage.h"
 #include "scene/strict_yaml_reader.h"
 
@@ -19,26 +20,6 @@ namespace p2i::fusion {
 namespace {
 
 constexpr double kRadToDeg = 57.29577951308232;
-
-/// Bilinear RGB sample of a CV_8UC3 image at (x, y) in pixel coordinates, in [0, 1]; the caller
-/// guarantees 0 <= x <= w - 1 and 0 <= y <= h - 1.
-cv::Vec3f Bilinear(const cv::Mat& rgb, float x, float y) {
-  const int x0 = std::min(static_cast<int>(x), rgb.cols - 2 >= 0 ? rgb.cols - 2 : 0);
-  const int y0 = std::min(static_cast<int>(y), rgb.rows - 2 >= 0 ? rgb.rows - 2 : 0);
-  const int x1 = std::min(x0 + 1, rgb.cols - 1), y1 = std::min(y0 + 1, rgb.rows - 1);
-  const float ax = x - x0, ay = y - y0;
-  const cv::Vec3b& p00 = rgb.at<cv::Vec3b>(y0, x0);
-  const cv::Vec3b& p01 = rgb.at<cv::Vec3b>(y0, x1);
-  const cv::Vec3b& p10 = rgb.at<cv::Vec3b>(y1, x0);
-  const cv::Vec3b& p11 = rgb.at<cv::Vec3b>(y1, x1);
-  cv::Vec3f out;
-  for (int c = 0; c < 3; ++c) {
-    const float top = p00[c] + ax * (p01[c] - p00[c]);
-    const float bottom = p10[c] + ax * (p11[c] - p10[c]);
-    out[c] = (top + ay * (bottom - top)) * (1.0f / 255.0f);
-  }
-  return out;
-}
 
 struct Slot {
   int index = -1;
@@ -129,6 +110,7 @@ class KeyframeBlender {
     vis_abs_ = static_cast<float>(bo.visibility_abs_m), vis_rel_ = static_cast<float>(bo.visibility_rel);
     res_w_ = static_cast<float>(bo.resolution_weight), eps_ = static_cast<float>(bo.penalty_epsilon);
     floor_g_ = static_cast<float>(bo.grazing_floor);
+    bicubic_ = bo.sampling == "bicubic";
     sigma_ = static_cast<float>(bo.angle_sigma_deg / kRadToDeg);
   }
 
@@ -174,7 +156,7 @@ class KeyframeBlender {
       pen_[j] = a + res_w_ * res;
       ang_[j] = a;
       graze_[j] = std::max(floor_g_, nw.dot(to_k) / dist_k);
-      col_[j] = Bilinear(s.frame->rgb, pu, pv);
+      col_[j] = bicubic_ ? SampleBicubic(s.frame->rgb, pu, pv) : SampleBilinear(s.frame->rgb, pu, pv);
       vis_[j] = true;
       *p_max = std::max(*p_max, pen_[j]);
       ++n_vis;
@@ -217,6 +199,7 @@ class KeyframeBlender {
   float fx_, fy_, cx_, cy_, kfx_, kfy_, kcx_, kcy_;
   int kw_, kh_;
   float vis_abs_, vis_rel_, res_w_, eps_, floor_g_, sigma_;
+  bool bicubic_ = true;
   std::array<float, 16> pen_{}, graze_{}, ang_{}, wgt_{};
   std::array<cv::Vec3f, 16> col_{};
   std::array<bool, 16> vis_{};
@@ -228,7 +211,8 @@ BlendOptions BlendOptions::FromYaml(const YAML::Node& node, const std::string& s
   const scene::StrictYamlReader r(source);
   r.CheckKeys(node,
               {"k", "metres_per_degree", "visibility_abs_m", "visibility_rel", "resolution_weight",
-               "penalty_epsilon", "grazing_floor", "angle_sigma_deg", "keyframe_min_distance"},
+               "penalty_epsilon", "grazing_floor", "angle_sigma_deg", "keyframe_min_distance",
+               "sampling"},
               "blend options");
   BlendOptions o;
   if (node["k"]) {
@@ -244,6 +228,7 @@ BlendOptions BlendOptions::FromYaml(const YAML::Node& node, const std::string& s
   r.OptionalDouble(node, "grazing_floor", "blend", &o.grazing_floor);
   r.OptionalDouble(node, "angle_sigma_deg", "blend", &o.angle_sigma_deg);
   r.OptionalDouble(node, "keyframe_min_distance", "blend", &o.keyframe_min_distance);
+  if (node["sampling"]) o.sampling = r.String(node["sampling"], "sampling");
   try {
     o.Validate();
   } catch (const std::invalid_argument& e) {
@@ -264,6 +249,8 @@ void BlendOptions::Validate() const {
   if (!(angle_sigma_deg > 0.0) || !std::isfinite(angle_sigma_deg)) fail("angle_sigma_deg must be > 0");
   if (!(keyframe_min_distance >= 0.0) || !std::isfinite(keyframe_min_distance))
     fail("keyframe_min_distance must be >= 0");
+  if (sampling != "bicubic" && sampling != "bilinear")
+    fail("sampling must be bicubic or bilinear, got '" + sampling + "'");
 }
 
 FusionSceneOptions FusionSceneOptions::FromYaml(const YAML::Node& node, const std::string& source) {

@@ -44,6 +44,9 @@ struct BlendOptions {
   /// A new frame becomes a keyframe only when its pose is at least this far (CombinedPoseDistance)
   /// from every keyframe (0 = every frame is a keyframe; the TSDF always gets every frame).
   double keyframe_min_distance = 0.0;
+  /// How a keyframe's colour is read at a surface point's projection (keyframe_sampling.h):
+  /// "bicubic" (Catmull-Rom; sharper) or "bilinear" (the default before 2026-12-03).
+  std::string sampling = "bicubic";
   static BlendOptions FromYaml(const YAML::Node& node, const std::string& source);
   void Validate() const;
 };
