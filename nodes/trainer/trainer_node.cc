@@ -120,7 +120,9 @@ void TrainerNode::StartMapper(TrainerNodeOptions& options, const std::string& wo
         Log().info("fusion version {} ({} frames integrated, {} keyframes, refinement: {}): {}",
                    m.version, m.frames_integrated, m.keyframe_count,
                    m.refine_file.empty() ? std::string("none")
-                                         : std::to_string(m.step) + " fine-tuning steps",
+                   : m.step > 0 ? "fine-tuned online, " + std::to_string(m.step) +
+                                      " optimiser steps in all"
+                                : std::string("refine_net as it is"),
                    dir);
       });
   Log().info("method fusion: mapping online, a version every {} integrated frames into {}",
