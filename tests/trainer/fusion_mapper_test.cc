@@ -31,6 +31,15 @@ FusionMapperOptions Options(const std::string& dir) {
   return o;
 }
 
+/// Polls `done` every 10 ms for up to `seconds`; returns its last value.
+template <typename Pred>
+bool WaitUntil(Pred done, int seconds) {
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(seconds);
+  while (!done() && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  return done();
+}
+
 struct Published {
   std::vector<model::FusionVersionManifest> manifests;
   std::vector<std::string> dirs;
@@ -105,9 +114,7 @@ TEST_CASE("fusion mapper: another camera is refused, a full queue drops the olde
   scene::CameraInfo other = frames.camera;
   other.camera_matrix[0] *= 1.5;
   mapper.Submit(frames.frames[1], other, true);
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
-  while (mapper.GetStats().rejected == 0 && std::chrono::steady_clock::now() < deadline)
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  WaitUntil([&] { return mapper.GetStats().rejected > 0; }, 20);
   for (const auto& f : frames.frames) mapper.Submit(f, frames.camera);  // no wait: as a camera
   mapper.Stop();
   const FusionMapper::Stats st = mapper.GetStats();
@@ -141,13 +148,10 @@ TEST_CASE("fusion mapper: the refinement is fine-tuned online and carried by the
   FusionMapper mapper(o, published.Callback());
   // Version 1 (4 keyframes: fewer than min_keyframes 8, the offer is skipped), version 2 (8).
   for (size_t i = 0; i < 8; ++i) mapper.Submit(frames.frames[i], frames.camera, true);
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
-  while (mapper.GetStats().refine_rounds == 0 && std::chrono::steady_clock::now() < deadline)
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  REQUIRE(WaitUntil([&] { return mapper.GetStats().refine_rounds > 0; }, 120));
   REQUIRE(mapper.GetStats().refine_rounds == 1);
   // No frame comes: the new net goes out in a version of its own (same map, 8 frames).
-  while (mapper.GetStats().versions < 3 && std::chrono::steady_clock::now() < deadline)
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  REQUIRE(WaitUntil([&] { return mapper.GetStats().versions >= 3; }, 60));
   REQUIRE(mapper.GetStats().versions == 3);
   for (size_t i = 8; i < 12; ++i) mapper.Submit(frames.frames[i], frames.camera, true);
   mapper.Stop();
@@ -191,9 +195,7 @@ TEST_CASE("refine tuner: too few keyframes are skipped, a round stops at Stop an
   {
     RefineTuner tuner(o);
     tuner.Offer({frames.frames.begin(), frames.frames.begin() + 3}, frames.camera);
-    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
-    while (tuner.GetStats().offers_skipped == 0 && std::chrono::steady_clock::now() < deadline)
-      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    REQUIRE(WaitUntil([&] { return tuner.GetStats().offers_skipped > 0; }, 60));
     CHECK(tuner.GetStats().offers_skipped == 1);
     CHECK_THAT(tuner.GetStats().last_error, Catch::Contains("fewer than min_keyframes 4"));
     CHECK(tuner.LatestNet().path.empty());
