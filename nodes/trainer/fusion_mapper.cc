@@ -2,7 +2,6 @@
 /// @brief FusionMapper: the mapping thread (queue -> TSDF + keyframes -> versions).
 #include "nodes/trainer/fusion_mapper.h"
 
-#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -184,8 +183,6 @@ void FusionMapper::Publish() {
       info.refine_source = net.path;
       info.refine_steps = net.steps;
     }
-    // Offered below only when new keyframes came since the last offer: a version for a new net
-    // alone (no new frame) would otherwise start a round on the same keyframes, for ever.
   }
   {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -197,7 +194,7 @@ void FusionMapper::Publish() {
   } catch (const std::exception& e) {
     std::lock_guard<std::mutex> lock(mutex_);
     stats_.last_error = std::string("version ") + std::to_string(info.version) + ": " + e.what();
-    return;  // retried after the next publish_every_frames frames
+    return;  // retried after the next publish_every_frames frames (a new net's alone: in 0.2 s)
   }
   ++next_version_;
   const bool new_frames = unpublished_ > 0;
@@ -209,12 +206,9 @@ void FusionMapper::Publish() {
     stats_.last_version = info.version;
   }
   Prune();
-  if (tuner_ && new_frames) {  // the next round tunes on the keyframes of this version
-    const auto& all = scene_->keyframes();
-    const size_t n = std::min(all.size(), static_cast<size_t>(options_.refine_window_keyframes));
-    tuner_->Offer(std::vector<scene::RgbdSample>(all.end() - static_cast<std::ptrdiff_t>(n), all.end()),
-                  scene_->frame_camera());
-  }
+  // The next round tunes on the keyframes of this version; only when new frames came: a version
+  // for a new net alone would otherwise start a round on the same keyframes, for ever.
+  if (tuner_ && new_frames) tuner_->Offer(scene_->keyframes(), scene_->frame_camera());
   if (on_version_) on_version_(model::ReadFusionVersion(dir), dir);
 }
 

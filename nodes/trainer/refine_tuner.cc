@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstddef>
 #include <cstdio>
 #include <filesystem>
 #include <stdexcept>
@@ -48,14 +49,14 @@ RefineTuner::RefineTuner(RefineTunerOptions options) : options_(std::move(option
 
 RefineTuner::~RefineTuner() { Stop(); }
 
-void RefineTuner::Offer(std::vector<scene::RgbdSample> keyframes, const scene::CameraInfo& camera) {
-  std::lock_guard<std::mutex> lock(mutex_);
-  if (stopping_) return;
-  const size_t window = static_cast<size_t>(options_.window_keyframes);
-  if (keyframes.size() > window) keyframes.erase(keyframes.begin(), keyframes.end() - window);
+void RefineTuner::Offer(const std::vector<scene::RgbdSample>& keyframes,
+                        const scene::CameraInfo& camera) {
+  const size_t n = std::min(keyframes.size(), static_cast<size_t>(options_.window_keyframes));
   scene::RgbdDataset d;
   d.camera = camera;
-  d.frames = std::move(keyframes);
+  d.frames.assign(keyframes.end() - static_cast<std::ptrdiff_t>(n), keyframes.end());
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (stopping_) return;
   pending_ = std::move(d);
   cv_.notify_all();
 }

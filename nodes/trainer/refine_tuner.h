@@ -70,9 +70,9 @@ class RefineTuner {
   explicit RefineTuner(RefineTunerOptions options);
   ~RefineTuner();  ///< Stop()
 
-  /// The keyframes to tune on next (their images are shared, not copied: the caller must not
-  /// modify them). Replaces an offer not yet taken.
-  void Offer(std::vector<scene::RgbdSample> keyframes, const scene::CameraInfo& camera);
+  /// The keyframes to tune on next: the newest window_keyframes of `keyframes` (their images are
+  /// shared, not copied: the caller must not modify them). Replaces an offer not yet taken.
+  void Offer(const std::vector<scene::RgbdSample>& keyframes, const scene::CameraInfo& camera);
   /// The newest fine-tuned net: its file ("" until the first round has finished) and the Adam
   /// steps it has seen.
   struct Net {
