@@ -22,7 +22,7 @@ FusionOptions ReadOptions(const YAML::Node& options, const std::string& source) 
 }  // namespace
 
 const std::vector<std::string>& FusionOptionKeys() {
-  static const std::vector<std::string> keys{"tsdf", "blend", "fill_holes"};
+  static const std::vector<std::string> keys{"tsdf", "blend", "submaps", "fill_holes"};
   return keys;
 }
 

@@ -255,16 +255,18 @@ void BlendOptions::Validate() const {
 
 FusionSceneOptions FusionSceneOptions::FromYaml(const YAML::Node& node, const std::string& source) {
   const scene::StrictYamlReader r(source);
-  r.CheckKeys(node, {"tsdf", "blend"}, "fusion scene options");
+  r.CheckKeys(node, {"tsdf", "blend", "submaps"}, "fusion scene options");
   FusionSceneOptions o;
   if (node["tsdf"]) o.tsdf = TsdfOptions::FromYaml(node["tsdf"], source);
   if (node["blend"]) o.blend = BlendOptions::FromYaml(node["blend"], source);
+  if (node["submaps"]) o.submaps = SubmapOptions::FromYaml(node["submaps"], source);
   return o;
 }
 
 void FusionSceneOptions::Validate() const {
   tsdf.Validate();
   blend.Validate();
+  submaps.Validate();
 }
 
 FusionScene::FusionScene(scene::CameraInfo frame_camera, FusionSceneOptions options)
@@ -274,6 +276,12 @@ FusionScene::FusionScene(scene::CameraInfo frame_camera, FusionSceneOptions opti
       frame_camera_.fx() <= 0.0 || frame_camera_.fy() <= 0.0) {
     throw std::invalid_argument("FusionScene: the frame camera needs a positive size and focal length");
   }
+  if (options_.submaps.enabled()) submaps_.emplace(options_.submaps, options_.tsdf);
+}
+
+void FusionScene::Integrate(const scene::RgbdSample& frame) {
+  tsdf_.Integrate(frame, frame_camera_);
+  if (submaps_) submaps_->Integrate(frame, frame_camera_);
 }
 
 bool FusionScene::AddFrame(const scene::RgbdSample& frame, bool integrate) {
@@ -284,7 +292,7 @@ bool FusionScene::AddFrame(const scene::RgbdSample& frame, bool integrate) {
                                 "' needs rgb CV_8UC3 and depth CV_32FC1 of the camera size " +
                                 std::to_string(size.width) + "x" + std::to_string(size.height));
   }
-  if (integrate) tsdf_.Integrate(frame, frame_camera_);
+  if (integrate) Integrate(frame);
   const double min_d = options_.blend.keyframe_min_distance;
   if (min_d > 0.0 && !poses_.empty()) {
     const auto nearest = model::NearestPoseIndices(poses_, frame.pose, 1, options_.blend.metres_per_degree);
@@ -300,15 +308,29 @@ bool FusionScene::AddFrame(const scene::RgbdSample& frame, bool integrate) {
   kf.depth = frame.depth.clone();
   keyframes_.push_back(std::move(kf));
   poses_.push_back(frame.pose);
+  keyframe_submap_.push_back(submaps_ ? submaps_->current() : -1);
   return true;
+}
+
+TsdfRaycast FusionScene::Surface(const std::vector<int>& slot_keyframes, const scene::Pose& pose,
+                                 const scene::CameraInfo& camera) {
+  if (!submaps_ || submaps_->size() == 0) return tsdf_.Raycast(pose, camera);
+  std::vector<int> order;
+  for (int i : slot_keyframes) order.push_back(keyframe_submap_.at(static_cast<size_t>(i)));
+  TsdfRaycast ray = submaps_->Raycast(order, pose, camera);
+  if (cv::countNonZero(ray.depth > 0.0f) < ray.depth.rows * ray.depth.cols)
+    FillMissingSurface(&ray, tsdf_.Raycast(pose, camera));
+  return ray;
 }
 
 ViewCandidates FusionScene::RenderCandidates(const scene::Pose& pose, const scene::CameraInfo& camera,
                                              const CandidateRequest& request) {
   const int k = options_.blend.k;
-  ViewCandidates c = EmptyCandidates(pose, camera, tsdf_.Raycast(pose, camera), k);
   const std::vector<Slot> slots = SelectSlots(keyframes_, poses_, pose, k, request,
                                               options_.blend.metres_per_degree);
+  std::vector<int> slot_keyframes;
+  for (const Slot& s : slots) slot_keyframes.push_back(s.index);
+  ViewCandidates c = EmptyCandidates(pose, camera, Surface(slot_keyframes, pose, camera), k);
   RecordSlots(slots, k, &c);
   KeyframeBlender blender(pose, camera, frame_camera_, options_.blend, slots);
   BlendStats stats;

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "fusion/submaps.h"
 #include "fusion/tsdf_volume.h"
 #include "fusion/view_candidates.h"
 #include "scene/camera_info.h"
@@ -54,7 +55,9 @@ struct BlendOptions {
 struct FusionSceneOptions {
   TsdfOptions tsdf;
   BlendOptions blend;
-  /// Reads {tsdf: {...}, blend: {...}} (both optional), then Validate().
+  /// Local submaps (off by default: one global TSDF).
+  SubmapOptions submaps;
+  /// Reads {tsdf: {...}, blend: {...}, submaps: {...}} (all optional), then Validate().
   static FusionSceneOptions FromYaml(const YAML::Node& node, const std::string& source);
   void Validate() const;
 };
@@ -79,6 +82,10 @@ class FusionScene {
   /// naming the frame when its images do not match the frame camera.
   bool AddFrame(const scene::RgbdSample& frame, bool integrate = true);
 
+  /// Integrates the frame into the TSDF (and the current submap) without keeping it as a
+  /// keyframe. A keyframe added next with AddFrame(frame, false) belongs to that submap.
+  void Integrate(const scene::RgbdSample& frame);
+
   /// Raycast + keyframe blending at `pose` through `camera` (any size and aspect).
   ViewCandidates RenderCandidates(const scene::Pose& pose, const scene::CameraInfo& camera,
                                   const CandidateRequest& request = {});
@@ -89,11 +96,22 @@ class FusionScene {
   const FusionSceneOptions& options() const { return options_; }
   TsdfStats Stats() const { return tsdf_.Stats(); }
   TsdfVolume& tsdf() { return tsdf_; }
+  /// The submaps (null when SubmapOptions::frames is 0) and the submap of each keyframe (-1: it
+  /// was added before any frame was integrated, e.g. from a saved version).
+  SubmapSet* submaps() { return submaps_ ? &*submaps_ : nullptr; }
+  const std::vector<int>& keyframe_submaps() const { return keyframe_submap_; }
 
  private:
+  /// The raycast surface of a view: the global TSDF's, or (submaps) the merged raycast of the
+  /// submaps of the slots' keyframes (nearest first), its holes filled from the global TSDF.
+  TsdfRaycast Surface(const std::vector<int>& slot_keyframes, const scene::Pose& pose,
+                      const scene::CameraInfo& camera);
+
   scene::CameraInfo frame_camera_;
   FusionSceneOptions options_;
   TsdfVolume tsdf_;
+  std::optional<SubmapSet> submaps_;
+  std::vector<int> keyframe_submap_;
   std::vector<scene::RgbdSample> keyframes_;
   std::vector<scene::Pose> poses_;
 };

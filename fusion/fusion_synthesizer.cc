@@ -35,10 +35,11 @@ scene::RgbdSample ToView(const scene::Pose& pose, const cv::Mat& rgb, const cv::
 
 FusionOptions FusionOptions::FromYaml(const YAML::Node& node, const std::string& source) {
   const scene::StrictYamlReader r(source);
-  r.CheckKeys(node, {"tsdf", "blend", "fill_holes"}, "fusion options");
+  r.CheckKeys(node, {"tsdf", "blend", "submaps", "fill_holes"}, "fusion options");
   FusionOptions o;
   if (node["tsdf"]) o.scene.tsdf = TsdfOptions::FromYaml(node["tsdf"], source);
   if (node["blend"]) o.scene.blend = BlendOptions::FromYaml(node["blend"], source);
+  if (node["submaps"]) o.scene.submaps = SubmapOptions::FromYaml(node["submaps"], source);
   if (node["fill_holes"]) {
     try {
       o.fill_holes = node["fill_holes"].as<bool>();

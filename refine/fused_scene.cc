@@ -52,7 +52,7 @@ class SceneOverFusion : public FusedScene {
       : options_(FromFusionOptions(f)), fusion_options_(f) {}
 
   void Integrate(const scene::RgbdSample& frame, const scene::CameraInfo& camera) override {
-    Scene(camera).tsdf().Integrate(frame, camera);
+    Scene(camera).Integrate(frame);
   }
 
   void AddKeyframe(const scene::RgbdSample& frame, const scene::CameraInfo& camera) override {

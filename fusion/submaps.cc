@@ -1,0 +1,117 @@
+/// @file submaps.cc
+/// @brief Local TSDF submaps and the merge of their raycasts.
+#include "fusion/submaps.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <utility>
+
+#include <yaml-cpp/yaml.h>
+
+#include "scene/strict_yaml_reader.h"
+
+namespace p2i::fusion {
+
+SubmapOptions SubmapOptions::FromYaml(const YAML::Node& node, const std::string& source) {
+  const scene::StrictYamlReader r(source);
+  r.CheckKeys(node, {"frames", "break_m", "break_deg", "render"}, "submap options");
+  SubmapOptions o;
+  auto integer = [&](const char* key, int* out) {
+    if (!node[key]) return;
+    const double v = r.Double(node[key], key);
+    if (v != std::floor(v)) r.Fail(node[key], std::string(key) + " must be an integer");
+    *out = static_cast<int>(v);
+  };
+  integer("frames", &o.frames);
+  integer("render", &o.render);
+  r.OptionalDouble(node, "break_m", "submaps", &o.break_m);
+  r.OptionalDouble(node, "break_deg", "submaps", &o.break_deg);
+  try {
+    o.Validate();
+  } catch (const std::invalid_argument& e) {
+    r.Fail(node, e.what());
+  }
+  return o;
+}
+
+void SubmapOptions::Validate() const {
+  auto fail = [](const std::string& what) { throw std::invalid_argument("SubmapOptions." + what); };
+  if (frames < 0) fail("frames must be >= 0 (0 = one global TSDF), got " + std::to_string(frames));
+  if (!(break_m > 0.0) || !std::isfinite(break_m)) fail("break_m must be > 0");
+  if (!(break_deg > 0.0) || !std::isfinite(break_deg)) fail("break_deg must be > 0");
+  if (render < 1 || render > 8) fail("render must be in [1, 8], got " + std::to_string(render));
+}
+
+SubmapSet::SubmapSet(SubmapOptions options, TsdfOptions tsdf) : options_(options), tsdf_(std::move(tsdf)) {
+  options_.Validate();
+  tsdf_.Validate();
+}
+
+int SubmapSet::Integrate(const scene::RgbdSample& frame, const scene::CameraInfo& camera) {
+  bool start = maps_.empty() || maps_.back().frames >= options_.frames;
+  if (!start && has_last_) {
+    start = scene::Pose::TranslationDistance(last_pose_, frame.pose) > options_.break_m ||
+            scene::Pose::RotationDistanceDeg(last_pose_, frame.pose) > options_.break_deg;
+  }
+  if (start) maps_.push_back(Map{TsdfVolume(tsdf_), 0});
+  maps_.back().volume.Integrate(frame, camera);
+  ++maps_.back().frames;
+  last_pose_ = frame.pose;
+  has_last_ = true;
+  return current();
+}
+
+int64_t FillMissingSurface(TsdfRaycast* into, const TsdfRaycast& from) {
+  int64_t filled = 0;
+  for (int v = 0; v < into->depth.rows; ++v) {
+    float* d = into->depth.ptr<float>(v);
+    const float* fd = from.depth.ptr<float>(v);
+    for (int u = 0; u < into->depth.cols; ++u) {
+      if (d[u] > 0.0f || !(fd[u] > 0.0f)) continue;
+      d[u] = fd[u];
+      into->normals.at<cv::Vec3f>(v, u) = from.normals.at<cv::Vec3f>(v, u);
+      into->colour.at<cv::Vec3f>(v, u) = from.colour.at<cv::Vec3f>(v, u);
+      ++filled;
+    }
+  }
+  return filled;
+}
+
+TsdfRaycast SubmapSet::Raycast(const std::vector<int>& order, const scene::Pose& pose,
+                               const scene::CameraInfo& camera, cv::Mat* from) {
+  const cv::Size size(camera.image_width, camera.image_height);
+  TsdfRaycast out{cv::Mat::zeros(size, CV_32FC1), cv::Mat::zeros(size, CV_32FC3),
+                  cv::Mat::zeros(size, CV_32FC3)};
+  if (from) *from = cv::Mat::zeros(size, CV_8UC1);
+  std::vector<int> used;
+  for (size_t i = 0; i < order.size() && static_cast<int>(used.size()) < options_.render; ++i) {
+    const int m = order[i];
+    if (m < 0 || m >= static_cast<int>(maps_.size())) continue;
+    if (std::find(used.begin(), used.end(), m) != used.end()) continue;
+    used.push_back(m);
+    const TsdfRaycast ray = maps_[static_cast<size_t>(m)].volume.Raycast(pose, camera);
+    if (from) {
+      const cv::Mat before = out.depth > 0.0f;
+      FillMissingSurface(&out, ray);
+      from->setTo(static_cast<uint8_t>(i + 1), (out.depth > 0.0f) & ~before);
+    } else {
+      FillMissingSurface(&out, ray);
+    }
+  }
+  return out;
+}
+
+TsdfStats SubmapSet::Stats() const {
+  TsdfStats s;
+  for (const Map& m : maps_) {
+    const TsdfStats t = m.volume.Stats();
+    s.frames += t.frames;
+    s.blocks += t.blocks;
+    s.memory_bytes += t.memory_bytes;
+    s.block_volume_m3 += t.block_volume_m3;
+  }
+  return s;
+}
+
+}  // namespace p2i::fusion

@@ -1,0 +1,87 @@
+/// @file submaps.h
+/// @brief Local TSDF submaps: the frames of one stretch of the trajectory fused on their own, so a
+/// view is rendered from geometry whose poses agree with the keyframes that colour it. Poses that
+/// drift over a long capture, or two captures whose poses disagree where they overlap, make one
+/// global TSDF average surfaces that are off by centimetres; the keyframes of either capture then
+/// project their colours onto the wrong place (docs/RESULTS.md "One capture at a time").
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "fusion/tsdf_volume.h"
+#include "scene/camera_info.h"
+#include "scene/pose.h"
+#include "scene/rgbd_sample.h"
+
+namespace YAML {
+class Node;
+}  // namespace YAML
+
+namespace p2i::fusion {
+
+struct SubmapOptions {
+  /// Frames fused into one submap before the next one starts (0 = no submaps: one global TSDF).
+  int frames = 0;
+  /// A frame whose pose jumps this far from the previous frame's (metres, or degrees) starts a new
+  /// submap: the next capture, or a relocalisation.
+  double break_m = 0.5;
+  double break_deg = 45.0;
+  /// A view is raycast in the submaps of its nearest keyframe slots, nearest first, at most this
+  /// many; each fills the pixels the previous ones left without a surface. The global TSDF (every
+  /// frame) fills what is left.
+  int render = 2;
+  /// Reads {frames, break_m, break_deg, render} (all optional), then Validate(). Unknown keys and
+  /// bad values throw std::runtime_error naming `source`, the line and the key.
+  static SubmapOptions FromYaml(const YAML::Node& node, const std::string& source);
+  /// Throws std::invalid_argument naming the field.
+  void Validate() const;
+  bool enabled() const { return frames > 0; }
+};
+
+/// The submaps of a growing capture. Frames arrive in capture order (Integrate); each goes into
+/// the current submap, which ends after SubmapOptions::frames frames or at a pose jump.
+/// Thread-compatible, like TsdfVolume.
+class SubmapSet {
+ public:
+  SubmapSet(SubmapOptions options, TsdfOptions tsdf);
+
+  /// Fuses the frame into the current submap (starting a new one first when due) and returns that
+  /// submap's index.
+  int Integrate(const scene::RgbdSample& frame, const scene::CameraInfo& camera);
+
+  /// Index of the submap the next frame would go to when it continues the current one (the last
+  /// one), -1 before the first frame.
+  int current() const { return static_cast<int>(maps_.size()) - 1; }
+  size_t size() const { return maps_.size(); }
+  TsdfVolume& map(size_t i) { return maps_.at(i).volume; }
+  int frames_in(size_t i) const { return maps_.at(i).frames; }
+  const SubmapOptions& options() const { return options_; }
+
+  /// Raycasts the submaps `order` (indices, nearest first; duplicates and -1 are skipped, at most
+  /// SubmapOptions::render of them) and merges them: each pixel takes the first submap with a
+  /// surface there. `*from` (optional, CV_8UC1) gets, per pixel, 1 + the position in `order` of
+  /// the submap it came from, 0 = none.
+  TsdfRaycast Raycast(const std::vector<int>& order, const scene::Pose& pose,
+                      const scene::CameraInfo& camera, cv::Mat* from = nullptr);
+
+  /// Memory and blocks summed over the submaps (frames: frames fused).
+  TsdfStats Stats() const;
+
+ private:
+  struct Map {
+    TsdfVolume volume;
+    int frames = 0;
+  };
+  SubmapOptions options_;
+  TsdfOptions tsdf_;
+  std::vector<Map> maps_;
+  bool has_last_ = false;
+  scene::Pose last_pose_;
+};
+
+/// Pixels of `into` without a surface (depth 0) take depth, normal and colour from `from`.
+/// Returns how many were filled.
+int64_t FillMissingSurface(TsdfRaycast* into, const TsdfRaycast& from);
+
+}  // namespace p2i::fusion

@@ -1,0 +1,69 @@
+/// @file submaps_test.cc
+/// @brief SubmapSet: frames split into submaps by count and by pose jumps; a view is raycast in
+/// the submaps of its keyframes, and the global TSDF fills the rest.
+#include <catch2/catch.hpp>
+#include <yaml-cpp/yaml.h>
+
+#include "fusion/fusion_scene.h"
+#include "fusion/submaps.h"
+#include "tests/fusion/fusion_test_util.h"
+
+namespace p2i::fusion {
+namespace {
+
+using testing::At;
+using testing::Cam;
+using testing::PlaneScene;
+
+TEST_CASE("SubmapSet: a submap ends after its frame count and at a pose jump", "[unit]") {
+  const PlaneScene plane;
+  const auto cam = Cam(40, 30, 35);
+  SubmapOptions o;
+  o.frames = 3;
+  o.break_m = 0.5;
+  SubmapSet set(o, TsdfOptions{});
+  std::vector<int> ids;
+  for (double x : {0.0, 0.05, 0.1, 0.15, 0.2, 1.0, 1.05})  // 1.0: a 0.8 m jump
+    ids.push_back(set.Integrate(plane.Render(At(x, 0, 0), cam), cam));
+  CHECK(ids == std::vector<int>{0, 0, 0, 1, 1, 2, 2});
+  CHECK(set.size() == 3);
+  CHECK(set.frames_in(1) == 2);
+  CHECK(set.Stats().frames == 7);
+  // The merged raycast takes the first listed submap with a surface; unknown indices are skipped.
+  cv::Mat from;
+  const TsdfRaycast r = set.Raycast({7, 2, 0}, At(1.0, 0, 0), cam, &from);
+  CHECK(cv::countNonZero(r.depth > 0.0f) > 0.8 * 40 * 30);
+  CHECK(cv::countNonZero(from == 2) == cv::countNonZero(r.depth > 0.0f) - cv::countNonZero(from == 3));
+  CHECK(cv::countNonZero(from == 1) == 0);
+}
+
+TEST_CASE("FusionScene with submaps: keyframes know their submap; views render from them", "[unit]") {
+  const PlaneScene plane;
+  const auto cam = Cam(40, 30, 35);
+  FusionSceneOptions o;
+  o.submaps.frames = 2;
+  FusionScene scene(cam, o);
+  for (double x : {0.0, 0.05, 0.1}) scene.AddFrame(plane.Render(At(x, 0, 0), cam));
+  REQUIRE(scene.submaps() != nullptr);
+  CHECK(scene.keyframe_submaps() == std::vector<int>{0, 0, 1});
+  const ViewCandidates c = scene.RenderCandidates(At(0.1, 0, 0), cam);
+  const cv::Mat truth = plane.Render(At(0.1, 0, 0), cam).depth;
+  CHECK(cv::countNonZero(c.depth > 0.0f) > 0.8 * 40 * 30);
+  CHECK(std::abs(c.depth.at<float>(15, 20) - truth.at<float>(15, 20)) < 0.01);
+  // Off by default: no submaps.
+  FusionScene plain(cam, FusionSceneOptions{});
+  CHECK(plain.submaps() == nullptr);
+}
+
+TEST_CASE("SubmapOptions: bad values are refused, naming the key", "[unit]") {
+  CHECK_THROWS_WITH(SubmapOptions::FromYaml(YAML::Load("{frames: -1}"), "x.yaml"),
+                    Catch::Contains("frames"));
+  CHECK_THROWS_WITH(SubmapOptions::FromYaml(YAML::Load("{render: 0}"), "x.yaml"),
+                    Catch::Contains("render"));
+  CHECK_THROWS_WITH(SubmapOptions::FromYaml(YAML::Load("{breaks: 1}"), "x.yaml"),
+                    Catch::Contains("breaks"));
+  CHECK(SubmapOptions::FromYaml(YAML::Load("{frames: 40, break_m: 0.3}"), "x.yaml").frames == 40);
+}
+
+}  // namespace
+}  // namespace p2i::fusion
