@@ -37,7 +37,7 @@ TEST_CASE("SubmapSet: a submap ends after its frame count and at a pose jump", "
   CHECK(cv::countNonZero(from == 1) == 0);
 }
 
-TEST_CASE("FusionScene with submaps: keyframes know their submap; views render from them", "[unit]") {
+TEST_CASE("FusionScene with submaps: keyframes know their submap, views render from them", "[unit]") {
   const PlaneScene plane;
   const auto cam = Cam(40, 30, 35);
   FusionSceneOptions o;
