@@ -215,11 +215,7 @@ BlendOptions BlendOptions::FromYaml(const YAML::Node& node, const std::string& s
                "sampling"},
               "blend options");
   BlendOptions o;
-  if (node["k"]) {
-    const double k = r.Double(node["k"], "k");
-    if (k != std::floor(k)) r.Fail(node["k"], "k must be an integer");
-    o.k = static_cast<int>(k);
-  }
+  if (node["k"]) o.k = r.Int(node["k"], "k");
   r.OptionalDouble(node, "metres_per_degree", "blend", &o.metres_per_degree);
   r.OptionalDouble(node, "visibility_abs_m", "blend", &o.visibility_abs_m);
   r.OptionalDouble(node, "visibility_rel", "blend", &o.visibility_rel);

@@ -17,14 +17,8 @@ SubmapOptions SubmapOptions::FromYaml(const YAML::Node& node, const std::string&
   const scene::StrictYamlReader r(source);
   r.CheckKeys(node, {"frames", "break_m", "break_deg", "render"}, "submap options");
   SubmapOptions o;
-  auto integer = [&](const char* key, int* out) {
-    if (!node[key]) return;
-    const double v = r.Double(node[key], key);
-    if (v != std::floor(v)) r.Fail(node[key], std::string(key) + " must be an integer");
-    *out = static_cast<int>(v);
-  };
-  integer("frames", &o.frames);
-  integer("render", &o.render);
+  if (node["frames"]) o.frames = r.Int(node["frames"], "frames");
+  if (node["render"]) o.render = r.Int(node["render"], "render");
   r.OptionalDouble(node, "break_m", "submaps", &o.break_m);
   r.OptionalDouble(node, "break_deg", "submaps", &o.break_deg);
   try {
@@ -50,7 +44,7 @@ SubmapSet::SubmapSet(SubmapOptions options, TsdfOptions tsdf) : options_(options
 
 int SubmapSet::Integrate(const scene::RgbdSample& frame, const scene::CameraInfo& camera) {
   bool start = maps_.empty() || maps_.back().frames >= options_.frames;
-  if (!start && has_last_) {
+  if (!start) {  // last_pose_ is the previous frame's
     start = scene::Pose::TranslationDistance(last_pose_, frame.pose) > options_.break_m ||
             scene::Pose::RotationDistanceDeg(last_pose_, frame.pose) > options_.break_deg;
   }
@@ -58,7 +52,6 @@ int SubmapSet::Integrate(const scene::RgbdSample& frame, const scene::CameraInfo
   maps_.back().volume.Integrate(frame, camera);
   ++maps_.back().frames;
   last_pose_ = frame.pose;
-  has_last_ = true;
   return current();
 }
 

@@ -54,7 +54,6 @@ class SubmapSet {
   /// one), -1 before the first frame.
   int current() const { return static_cast<int>(maps_.size()) - 1; }
   size_t size() const { return maps_.size(); }
-  TsdfVolume& map(size_t i) { return maps_.at(i).volume; }
   int frames_in(size_t i) const { return maps_.at(i).frames; }
   const SubmapOptions& options() const { return options_; }
 
@@ -76,8 +75,7 @@ class SubmapSet {
   SubmapOptions options_;
   TsdfOptions tsdf_;
   std::vector<Map> maps_;
-  bool has_last_ = false;
-  scene::Pose last_pose_;
+  scene::Pose last_pose_;  ///< of the last frame integrated (valid once maps_ is not empty)
 };
 
 /// Pixels of `into` without a surface (depth 0) take depth, normal and colour from `from`.

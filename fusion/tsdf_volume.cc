@@ -80,12 +80,6 @@ core::Tensor Extrinsic(const scene::Pose& pose) {
   return core::Tensor(v, {4, 4}, core::Float64);
 }
 
-int Int(const scene::StrictYamlReader& r, const YAML::Node& n, const std::string& what) {
-  const double v = r.Double(n, what);
-  if (v != std::floor(v)) r.Fail(n, what + " must be an integer");
-  return static_cast<int>(v);
-}
-
 bool Bool(const scene::StrictYamlReader& r, const YAML::Node& n, const std::string& what) {
   try {
     return n.as<bool>();
@@ -148,14 +142,14 @@ TsdfOptions TsdfOptions::FromYaml(const YAML::Node& node, const std::string& sou
               "tsdf options");
   TsdfOptions o;
   r.OptionalDouble(node, "voxel_size_m", "tsdf", &o.voxel_size_m);
-  if (node["block_resolution"]) o.block_resolution = Int(r, node["block_resolution"], "block_resolution");
-  if (node["initial_blocks"]) o.initial_blocks = Int(r, node["initial_blocks"], "initial_blocks");
+  if (node["block_resolution"]) o.block_resolution = r.Int(node["block_resolution"], "block_resolution");
+  if (node["initial_blocks"]) o.initial_blocks = r.Int(node["initial_blocks"], "initial_blocks");
   r.OptionalDouble(node, "trunc_voxels", "tsdf", &o.trunc_voxels);
   r.OptionalDouble(node, "depth_min_m", "tsdf", &o.depth_min_m);
   r.OptionalDouble(node, "depth_max_m", "tsdf", &o.depth_max_m);
   r.OptionalDouble(node, "weight_threshold", "tsdf", &o.weight_threshold);
-  if (node["crack_fill_passes"]) o.crack_fill_passes = Int(r, node["crack_fill_passes"], "crack_fill_passes");
-  if (node["threads"]) o.threads = Int(r, node["threads"], "threads");
+  if (node["crack_fill_passes"]) o.crack_fill_passes = r.Int(node["crack_fill_passes"], "crack_fill_passes");
+  if (node["threads"]) o.threads = r.Int(node["threads"], "threads");
   if (node["refine_hits"]) o.refine_hits = Bool(r, node["refine_hits"], "refine_hits");
   if (node["surface"]) o.surface = r.String(node["surface"], "surface");
   try {

@@ -66,11 +66,7 @@ DepthWarpOptions DepthWarpOptions::FromYaml(const YAML::Node& node, const std::s
   const scene::StrictYamlReader r(source);
   r.CheckKeys(node, {"k", "metres_per_degree", "z_tolerance", "fill_holes"}, "depth_warp options");
   DepthWarpOptions o;
-  if (node["k"]) {
-    const double k = r.Double(node["k"], "k");
-    if (k != std::floor(k)) r.Fail(node["k"], "k must be an integer");
-    o.k = static_cast<int>(k);
-  }
+  if (node["k"]) o.k = r.Int(node["k"], "k");
   if (node["metres_per_degree"]) o.metres_per_degree = r.Double(node["metres_per_degree"], "metres_per_degree");
   if (node["z_tolerance"]) o.z_tolerance = r.Double(node["z_tolerance"], "z_tolerance");
   if (node["fill_holes"]) {

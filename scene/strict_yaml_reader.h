@@ -63,6 +63,13 @@ class StrictYamlReader {
     }
   }
 
+  /// A whole number (as Double, then "WHAT must be an integer").
+  int Int(const YAML::Node& node, const std::string& what) const {
+    const double v = Double(node, what);
+    if (v != std::floor(v)) Fail(node, what + " must be an integer");
+    return static_cast<int>(v);
+  }
+
   std::string String(const YAML::Node& node, const std::string& what) const {
     if (!node.IsScalar()) Fail(node, what + " must be a string");
     return node.as<std::string>();
