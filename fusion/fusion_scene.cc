@@ -280,6 +280,26 @@ void FusionScene::Integrate(const scene::RgbdSample& frame) {
   if (submaps_) submaps_->Integrate(frame, frame_camera_);
 }
 
+void FusionScene::Prepare() {
+  tsdf_.Prepare();
+  if (submaps_) submaps_->Prepare();
+}
+
+void FusionScene::RestoreSubmaps(SubmapSet submaps, std::vector<int> keyframe_submaps) {
+  if (keyframe_submaps.size() != keyframes_.size()) {
+    throw std::invalid_argument("FusionScene::RestoreSubmaps: " + std::to_string(keyframe_submaps.size()) +
+                                " keyframe submaps for " + std::to_string(keyframes_.size()) + " keyframes");
+  }
+  for (int m : keyframe_submaps) {
+    if (m < -1 || m >= static_cast<int>(submaps.size()))
+      throw std::invalid_argument("FusionScene::RestoreSubmaps: keyframe submap " + std::to_string(m) +
+                                  " outside [-1, " + std::to_string(submaps.size()) + ")");
+  }
+  options_.submaps = submaps.options();
+  submaps_.emplace(std::move(submaps));
+  keyframe_submap_ = std::move(keyframe_submaps);
+}
+
 bool FusionScene::AddFrame(const scene::RgbdSample& frame, bool integrate) {
   const cv::Size size(frame_camera_.image_width, frame_camera_.image_height);
   if (frame.depth.type() != CV_32FC1 || frame.depth.size() != size || frame.rgb.type() != CV_8UC3 ||

@@ -86,6 +86,15 @@ class FusionScene {
   /// keyframe. A keyframe added next with AddFrame(frame, false) belongs to that submap.
   void Integrate(const scene::RgbdSample& frame);
 
+  /// Builds the meshes of the global TSDF and of every submap now (TsdfVolume::Prepare), so the
+  /// first views do not pay for them. Optional.
+  void Prepare();
+
+  /// Replaces the submaps with `submaps` (loaded from a saved version) and records the submap of
+  /// each keyframe (`keyframe_submaps`, one per keyframe added so far, each -1 or a valid index).
+  /// Throws std::invalid_argument when the counts or an index do not fit.
+  void RestoreSubmaps(SubmapSet submaps, std::vector<int> keyframe_submaps);
+
   /// Raycast + keyframe blending at `pose` through `camera` (any size and aspect).
   ViewCandidates RenderCandidates(const scene::Pose& pose, const scene::CameraInfo& camera,
                                   const CandidateRequest& request = {});

@@ -59,6 +59,7 @@ FusionSynthesizer::FusionSynthesizer(const scene::RgbdDataset& training, FusionO
       refiner_(std::move(refiner)) {
   CheckCamera(output_camera_, "FusionSynthesizer output");
   for (const auto& f : training.frames) scene_.AddFrame(f);
+  scene_.Prepare();  // the meshes belong to training, not to the first views
 }
 
 scene::RgbdSample FusionSynthesizer::RenderAt(const scene::Pose& pose, const scene::CameraInfo& camera) {

@@ -2,6 +2,8 @@
 /// @brief Writing a FusionScene as a fusion version, and building the method from one.
 #include "fusion/fusion_version_io.h"
 
+#include <algorithm>
+#include <cstdio>
 #include <filesystem>
 #include <stdexcept>
 
@@ -27,10 +29,25 @@ std::string WriteSceneVersion(const std::string& versions_dir, FusionScene& scen
   m.trunc_voxels = tsdf.trunc_voxels;
   m.refine_file = info.refine_source.empty() ? "" : "refine.pt";
   m.step = info.refine_steps;
+  if (const SubmapSet* sub = scene.submaps()) {
+    for (size_t i = 0; i < sub->size(); ++i) {
+      char name[32];
+      std::snprintf(name, sizeof(name), "submap_%04zu.npz", i);
+      m.submap_files.push_back(name);
+      m.submap_frame_counts.push_back(sub->frames_in(i));
+    }
+    const std::vector<int>& ks = scene.keyframe_submaps();
+    m.keyframe_submaps.assign(ks.begin(), ks.begin() + static_cast<std::ptrdiff_t>(
+                                                           std::min<size_t>(ks.size(), info.keyframe_count)));
+    m.submap_frames = sub->options().frames;
+    if (m.submap_files.empty()) m.keyframe_submaps.clear();  // no frame fused yet: none to save
+  }
   const std::string dir = model::FusionVersionDir(versions_dir, info.version);
   fs::create_directories(versions_dir);
   model::WriteFusionVersion(dir, m, [&](const std::string& temp) {
     scene.tsdf().Save(temp + "/" + m.tsdf_file);
+    for (size_t i = 0; i < m.submap_files.size(); ++i)
+      scene.submaps()->volume(i).Save(temp + "/" + m.submap_files[i]);
     if (!info.refine_source.empty())
       fs::copy_file(info.refine_source, temp + "/" + m.refine_file);
   });
@@ -68,7 +85,16 @@ LoadedFusionVersion LoadFusionVersion(const std::string& dir, FusionOptions opti
   FusionScene& fused = out.synthesizer->scene();
   fused.tsdf() = TsdfVolume::Load((fs::path(dir) / m.tsdf_file).string(), tsdf);
   for (size_t i = 0; i < m.keyframe_count; ++i) fused.AddFrame(keyframes.Load(i), /*integrate=*/false);
-  fused.tsdf().Prepare();  // the mesh now, in the loader's thread, not in the first view
+  if (!m.submap_files.empty()) {
+    SubmapOptions sub = options.scene.submaps;
+    sub.frames = m.submap_frames;
+    SubmapSet set(sub, tsdf);
+    for (size_t i = 0; i < m.submap_files.size(); ++i)
+      set.Append(TsdfVolume::Load((fs::path(dir) / m.submap_files[i]).string(), tsdf),
+                 m.submap_frame_counts[i]);
+    fused.RestoreSubmaps(std::move(set), m.keyframe_submaps);
+  }
+  fused.Prepare();  // the meshes now, in the loader's thread, not in the first view
   if (!m.refine_file.empty()) out.refine_path = fs::absolute(fs::path(dir) / m.refine_file).string();
   return out;
 }

@@ -43,16 +43,30 @@ SubmapSet::SubmapSet(SubmapOptions options, TsdfOptions tsdf) : options_(options
 }
 
 int SubmapSet::Integrate(const scene::RgbdSample& frame, const scene::CameraInfo& camera) {
-  bool start = maps_.empty() || maps_.back().frames >= options_.frames;
+  bool start = maps_.empty() || sealed_ || maps_.back().frames >= options_.frames;
   if (!start) {  // last_pose_ is the previous frame's
     start = scene::Pose::TranslationDistance(last_pose_, frame.pose) > options_.break_m ||
             scene::Pose::RotationDistanceDeg(last_pose_, frame.pose) > options_.break_deg;
   }
-  if (start) maps_.push_back(Map{TsdfVolume(tsdf_), 0});
+  if (start) {
+    if (!maps_.empty() && !sealed_) maps_.back().volume.Prepare();  // final from now on
+    maps_.push_back(Map{TsdfVolume(tsdf_), 0});
+    sealed_ = false;
+  }
   maps_.back().volume.Integrate(frame, camera);
   ++maps_.back().frames;
   last_pose_ = frame.pose;
   return current();
+}
+
+void SubmapSet::Append(TsdfVolume volume, int frames) {
+  if (frames < 0) throw std::invalid_argument("SubmapSet::Append: frames must be >= 0");
+  maps_.push_back(Map{std::move(volume), frames});
+  sealed_ = true;
+}
+
+void SubmapSet::Prepare() {
+  for (Map& m : maps_) m.volume.Prepare();
 }
 
 int64_t FillMissingSurface(TsdfRaycast* into, const TsdfRaycast& from) {

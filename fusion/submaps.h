@@ -47,14 +47,23 @@ class SubmapSet {
   SubmapSet(SubmapOptions options, TsdfOptions tsdf);
 
   /// Fuses the frame into the current submap (starting a new one first when due) and returns that
-  /// submap's index.
+  /// submap's index. The submap a new one replaces never changes again: it is prepared
+  /// (TsdfVolume::Prepare) here, so no view pays for its mesh.
   int Integrate(const scene::RgbdSample& frame, const scene::CameraInfo& camera);
+
+  /// Appends a finished submap (one loaded from a saved version, `frames` its frame count). The
+  /// next Integrate starts a new submap after it.
+  void Append(TsdfVolume volume, int frames);
+
+  /// Prepares every submap (TsdfVolume::Prepare): a loader calls it so views do not build meshes.
+  void Prepare();
 
   /// Index of the submap the next frame would go to when it continues the current one (the last
   /// one), -1 before the first frame.
   int current() const { return static_cast<int>(maps_.size()) - 1; }
   size_t size() const { return maps_.size(); }
   int frames_in(size_t i) const { return maps_.at(i).frames; }
+  const TsdfVolume& volume(size_t i) const { return maps_.at(i).volume; }
   const SubmapOptions& options() const { return options_; }
 
   /// Raycasts the submaps `order` (indices, nearest first; duplicates and -1 are skipped, at most
@@ -75,7 +84,8 @@ class SubmapSet {
   SubmapOptions options_;
   TsdfOptions tsdf_;
   std::vector<Map> maps_;
-  scene::Pose last_pose_;  ///< of the last frame integrated (valid once maps_ is not empty)
+  scene::Pose last_pose_;  ///< of the last frame integrated (valid unless sealed_)
+  bool sealed_ = false;    ///< the last submap was appended (Append): the next frame starts one
 };
 
 /// Pixels of `into` without a surface (depth 0) take depth, normal and colour from `from`.

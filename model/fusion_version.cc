@@ -56,6 +56,12 @@ std::string FusionVersionManifest::ToJson() const {
   j["voxel_size_m"] = voxel_size_m;
   j["block_resolution"] = block_resolution;
   j["trunc_voxels"] = trunc_voxels;
+  if (!submap_files.empty()) {
+    j["submap_files"] = submap_files;
+    j["submap_frame_counts"] = submap_frame_counts;
+    j["keyframe_submaps"] = keyframe_submaps;
+    j["submap_frames"] = submap_frames;
+  }
   j["val_psnr"] = val_psnr;
   j["val_psnr_blend"] = val_psnr_blend;
   return j.dump(2);
@@ -84,6 +90,24 @@ FusionVersionManifest FusionVersionManifest::FromJson(const std::string& text,
     m.voxel_size_m = j.at("voxel_size_m").get<double>();
     m.block_resolution = j.value("block_resolution", m.block_resolution);
     m.trunc_voxels = j.value("trunc_voxels", m.trunc_voxels);
+    if (j.contains("submap_files")) {
+      m.submap_files = j.at("submap_files").get<std::vector<std::string>>();
+      m.submap_frame_counts = j.at("submap_frame_counts").get<std::vector<int>>();
+      m.keyframe_submaps = j.at("keyframe_submaps").get<std::vector<int>>();
+      m.submap_frames = j.at("submap_frames").get<int>();
+      if (m.submap_frame_counts.size() != m.submap_files.size() ||
+          m.keyframe_submaps.size() != m.keyframe_count || m.submap_frames <= 0)
+        throw std::runtime_error(source + ": inconsistent submaps (" +
+                                 std::to_string(m.submap_files.size()) + " files, " +
+                                 std::to_string(m.submap_frame_counts.size()) + " frame counts, " +
+                                 std::to_string(m.keyframe_submaps.size()) + " keyframe submaps for " +
+                                 std::to_string(m.keyframe_count) + " keyframes, submap_frames " +
+                                 std::to_string(m.submap_frames) + ")");
+      for (int s : m.keyframe_submaps)
+        if (s < -1 || s >= static_cast<int>(m.submap_files.size()))
+          throw std::runtime_error(source + ": keyframe submap " + std::to_string(s) +
+                                   " names no submap file");
+    }
     m.val_psnr = j.value("val_psnr", 0.0);
     m.val_psnr_blend = j.value("val_psnr_blend", 0.0);
   } catch (const nlohmann::json::exception& e) {
@@ -142,6 +166,9 @@ FusionVersionManifest ReadFusionVersion(const std::string& dir) {
   if (!m.refine_file.empty() && !fs::exists(fs::path(dir) / m.refine_file))
     throw std::runtime_error("fusion version " + dir + ": refinement file " + m.refine_file +
                              " missing");
+  for (const std::string& f : m.submap_files)
+    if (!fs::exists(fs::path(dir) / f))
+      throw std::runtime_error("fusion version " + dir + ": submap file " + f + " missing");
   if (!m.keyframes_dir.empty() && !fs::is_directory(m.keyframes_dir))
     throw std::runtime_error("fusion version " + dir + ": keyframe folder " + m.keyframes_dir +
                              " missing");

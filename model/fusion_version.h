@@ -31,6 +31,14 @@ struct FusionVersionManifest {
   double voxel_size_m = 0.0;         ///< of the TSDF snapshot (fusion::TsdfOptions::voxel_size_m)
   int block_resolution = 16;         ///< of the TSDF snapshot (fusion::TsdfOptions::block_resolution)
   double trunc_voxels = 4.0;         ///< of the TSDF snapshot (fusion::TsdfOptions::trunc_voxels)
+  /// Local submaps (fusion::SubmapOptions; all empty = one global TSDF): one TSDF file per
+  /// submap (relative to the version folder, same voxel size as tsdf_file), the frames fused into
+  /// each, the submap of each of the keyframe_count keyframes (-1 = none), and the option
+  /// `frames` they were cut with.
+  std::vector<std::string> submap_files;
+  std::vector<int> submap_frame_counts;
+  std::vector<int> keyframe_submaps;
+  int submap_frames = 0;
   double val_psnr = 0.0;             ///< held-out (leave-one-out) PSNR of the refined view, dB
   double val_psnr_blend = 0.0;       ///< same frames, plain blend, dB
 

@@ -74,4 +74,81 @@ TEST_CASE("fusion version: written from a scene, built back with the same views"
                     Catch::Contains("manifest.json"));
 }
 
+TEST_CASE("fusion version: local submaps are saved and built back", "[unit]") {
+  const std::string dir = p2i::testing::FreshDir("fusion_version_io_submaps");
+  const auto sim = scene::SimScene::BuiltIn("small_office");
+  const scene::CameraInfo cam = scene::SimScene::DefaultCamera(80, 60);
+  const auto sweep = scene::GenerateArmSweep({});
+  FusionSceneOptions options;
+  options.tsdf.voxel_size_m = 0.03;
+  options.tsdf.block_resolution = 8;
+  options.submaps.frames = 6;
+  options.submaps.render = 1;
+  FusionScene fused(cam, options);
+  scene::CaptureWriter keyframes(dir + "/keyframes", cam);
+  scene::RgbdDataset frames;
+  frames.camera = cam;
+  const size_t n = sweep.size() / 8;
+  for (size_t j = 0; j < n; ++j) {
+    const size_t i = j * 8;
+    scene::RgbdSample s = sim.Render(sweep[i].pose, cam, sweep[i].stamp);
+    s.id = "f" + std::to_string(i);
+    // The second half's poses are recorded 6 cm off (a second capture that disagrees): its
+    // submaps and the global TSDF then hold different surfaces.
+    if (j >= n / 2)
+      s.pose = scene::Pose(s.pose.translation() + Eigen::Vector3d(0.06, 0.0, 0.0), s.pose.rotation());
+    fused.AddFrame(s);
+    keyframes.Append(s);
+    frames.frames.push_back(s);
+  }
+  REQUIRE(fused.submaps() != nullptr);
+  REQUIRE(fused.submaps()->size() >= 3);
+  FusionVersionInfo info;
+  info.version = 1;
+  info.frames_integrated = frames.frames.size();
+  info.keyframes_dir = dir + "/keyframes";
+  info.keyframe_count = frames.frames.size();
+  const std::string version_dir = WriteSceneVersion(dir + "/versions", fused, info);
+  const model::FusionVersionManifest m = model::ReadFusionVersion(version_dir);
+  CHECK(m.submap_files.size() == fused.submaps()->size());
+  CHECK(m.keyframe_submaps == fused.keyframe_submaps());
+  CHECK(m.submap_frames == 6);
+
+  FusionOptions plain;  // the caller's options have no submaps: the version's are restored
+  plain.scene.submaps.render = 1;  // a view-time option: the caller's
+  LoadedFusionVersion v = LoadFusionVersion(version_dir, plain, 48, 48);
+  FusionScene& loaded = v.synthesizer->scene();
+  REQUIRE(loaded.submaps() != nullptr);
+  CHECK(loaded.submaps()->size() == fused.submaps()->size());
+  CHECK(loaded.keyframe_submaps() == fused.keyframe_submaps());
+  for (size_t i = 0; i < loaded.submaps()->size(); ++i)
+    CHECK(loaded.submaps()->frames_in(i) == fused.submaps()->frames_in(i));
+
+  // The same views as the scene it came from; a view from the global TSDF alone differs.
+  FusionSynthesizer original(frames, FusionOptions{options, true}, v.synthesizer->Camera());
+  FusionSceneOptions global_only = options;
+  global_only.submaps.frames = 0;
+  FusionSynthesizer global(frames, FusionOptions{global_only, true}, v.synthesizer->Camera());
+  const scene::Pose pose = frames.frames[frames.frames.size() - 2].pose;
+  const scene::RgbdSample a = v.synthesizer->Render(pose);
+  const scene::RgbdSample b = original.Render(pose);
+  const scene::RgbdSample g = global.Render(pose);
+  CHECK(model::Psnr(a.rgb, b.rgb) > 35.0);
+  CHECK(model::ComputeDepthErrors(a.depth, b.depth).abs_rel < 1e-3);
+  INFO("global-only vs submaps: depth AbsRel " << model::ComputeDepthErrors(g.depth, b.depth).abs_rel);
+  CHECK(model::ComputeDepthErrors(g.depth, b.depth).abs_rel > 5e-3);
+
+  // A manifest whose keyframe submaps do not match its keyframes is refused, naming the fault.
+  model::FusionVersionManifest bad = m;
+  bad.keyframe_submaps.pop_back();
+  CHECK_THROWS_WITH(model::FusionVersionManifest::FromJson(bad.ToJson(), "m.json"),
+                    Catch::Contains("inconsistent submaps"));
+  bad = m;
+  bad.keyframe_submaps.back() = static_cast<int>(m.submap_files.size());
+  CHECK_THROWS_WITH(model::FusionVersionManifest::FromJson(bad.ToJson(), "m.json"),
+                    Catch::Contains("names no submap file"));
+  fs::remove(fs::path(version_dir) / m.submap_files.back());
+  CHECK_THROWS_WITH(LoadFusionVersion(version_dir, plain), Catch::Contains("submap file"));
+}
+
 }  // namespace p2i::fusion

@@ -37,6 +37,24 @@ TEST_CASE("SubmapSet: a submap ends after its frame count and at a pose jump", "
   CHECK(cv::countNonZero(from == 1) == 0);
 }
 
+TEST_CASE("SubmapSet: an appended (loaded) submap is closed, the next frame starts a new one", "[unit]") {
+  const PlaneScene plane;
+  const auto cam = Cam(40, 30, 35);
+  SubmapOptions o;
+  o.frames = 5;
+  TsdfVolume loaded{TsdfOptions{}};
+  loaded.Integrate(plane.Render(At(0, 0, 0), cam), cam);
+  SubmapSet set(o, TsdfOptions{});
+  set.Append(std::move(loaded), 1);
+  set.Prepare();
+  CHECK(set.size() == 1);
+  CHECK(set.Integrate(plane.Render(At(0.01, 0, 0), cam), cam) == 1);
+  CHECK(set.Integrate(plane.Render(At(0.02, 0, 0), cam), cam) == 1);
+  CHECK(set.frames_in(0) == 1);
+  CHECK(set.volume(0).Stats().frames == 1);
+  CHECK_THROWS(set.Append(TsdfVolume{TsdfOptions{}}, -1));
+}
+
 TEST_CASE("FusionScene with submaps: keyframes know their submap, views render from them", "[unit]") {
   const PlaneScene plane;
   const auto cam = Cam(40, 30, 35);
