@@ -334,8 +334,7 @@ TsdfRaycast FusionScene::Surface(const std::vector<int>& slot_keyframes, const s
   std::vector<int> order;
   for (int i : slot_keyframes) order.push_back(keyframe_submap_.at(static_cast<size_t>(i)));
   TsdfRaycast ray = submaps_->Raycast(order, pose, camera);
-  if (cv::countNonZero(ray.depth > 0.0f) < ray.depth.rows * ray.depth.cols)
-    FillMissingSurface(&ray, tsdf_.Raycast(pose, camera));
+  FillMissingFrom(tsdf_, pose, camera, &ray);
   return ray;
 }
 

@@ -7,6 +7,7 @@
 #include <stdexcept>
 #include <utility>
 
+#include <opencv2/imgproc.hpp>
 #include <yaml-cpp/yaml.h>
 
 #include "scene/strict_yaml_reader.h"
@@ -92,21 +93,30 @@ TsdfRaycast SubmapSet::Raycast(const std::vector<int>& order, const scene::Pose&
                   cv::Mat::zeros(size, CV_32FC3)};
   if (from) *from = cv::Mat::zeros(size, CV_8UC1);
   std::vector<int> used;
+  cv::Mat filled;
   for (size_t i = 0; i < order.size() && static_cast<int>(used.size()) < options_.render; ++i) {
     const int m = order[i];
     if (m < 0 || m >= static_cast<int>(maps_.size())) continue;
     if (std::find(used.begin(), used.end(), m) != used.end()) continue;
     used.push_back(m);
-    const TsdfRaycast ray = maps_[static_cast<size_t>(m)].volume.Raycast(pose, camera);
-    if (from) {
-      const cv::Mat before = out.depth > 0.0f;
-      FillMissingSurface(&out, ray);
-      from->setTo(static_cast<uint8_t>(i + 1), (out.depth > 0.0f) & ~before);
-    } else {
-      FillMissingSurface(&out, ray);
-    }
+    const int64_t n = FillMissingFrom(maps_[static_cast<size_t>(m)].volume, pose, camera, &out,
+                                      from ? &filled : nullptr);
+    if (from && n > 0) from->setTo(static_cast<uint8_t>(i + 1), filled);
   }
   return out;
+}
+
+int64_t FillMissingFrom(TsdfVolume& volume, const scene::Pose& pose, const scene::CameraInfo& camera,
+                        TsdfRaycast* into, cv::Mat* filled) {
+  const cv::Mat missing = into->depth <= 0.0f;
+  if (filled) *filled = cv::Mat::zeros(into->depth.size(), CV_8UC1);
+  if (cv::countNonZero(missing) == 0) return 0;
+  const cv::Rect box = cv::boundingRect(missing);
+  TsdfRaycast roi{into->depth(box), into->normals(box), into->colour(box)};  // views into `into`
+  const int64_t n =
+      FillMissingSurface(&roi, volume.Raycast(pose, camera.Cropped(box.x, box.y, box.width, box.height)));
+  if (filled) (*filled)(box).setTo(255, missing(box) & (roi.depth > 0.0f));
+  return n;
 }
 
 TsdfStats SubmapSet::Stats() const {

@@ -73,6 +73,33 @@ TEST_CASE("FusionScene with submaps: keyframes know their submap, views render f
   CHECK(plain.submaps() == nullptr);
 }
 
+TEST_CASE("FillMissingFrom: only the missing pixels, raycast through their rectangle", "[unit]") {
+  const PlaneScene plane;
+  const auto cam = Cam(40, 30, 35);
+  TsdfVolume volume{TsdfOptions{}};
+  for (double x : {0.0, 0.05}) volume.Integrate(plane.Render(At(x, 0, 0), cam), cam);
+  const scene::Pose pose = At(0.02, 0, 0);
+  const TsdfRaycast full = volume.Raycast(pose, cam);
+  REQUIRE(cv::countNonZero(full.depth > 0.0f) > 0.8 * 40 * 30);
+  TsdfRaycast into{cv::Mat::zeros(30, 40, CV_32FC1), cv::Mat::zeros(30, 40, CV_32FC3),
+                   cv::Mat::zeros(30, 40, CV_32FC3)};
+  into.depth(cv::Rect(0, 0, 25, 30)).setTo(5.0f);  // the left 25 columns have a surface already
+  cv::Mat filled;
+  const int64_t n = FillMissingFrom(volume, pose, cam, &into, &filled);
+  const cv::Mat right = full.depth(cv::Rect(25, 0, 15, 30)) > 0.0f;
+  CHECK(n == cv::countNonZero(right));
+  CHECK(cv::countNonZero(filled) == n);
+  CHECK(cv::countNonZero(filled(cv::Rect(0, 0, 25, 30))) == 0);
+  CHECK(cv::countNonZero(into.depth(cv::Rect(0, 0, 25, 30)) != 5.0f) == 0);  // left untouched
+  double worst = 0.0;
+  for (int v = 0; v < 30; ++v)
+    for (int u = 25; u < 40; ++u)
+      if (full.depth.at<float>(v, u) > 0.0f)
+        worst = std::max(worst, std::abs(double(into.depth.at<float>(v, u) - full.depth.at<float>(v, u))));
+  CHECK(worst < 1e-4);  // the same surface as the full view's at those pixels
+  CHECK(FillMissingFrom(volume, pose, cam, &into) == 0);  // a second call finds nothing more
+}
+
 TEST_CASE("SubmapOptions: bad values are refused, naming the key", "[unit]") {
   CHECK_THROWS_WITH(SubmapOptions::FromYaml(YAML::Load("{frames: -1}"), "x.yaml"),
                     Catch::Contains("frames"));
