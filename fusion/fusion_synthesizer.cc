@@ -2,6 +2,9 @@
 /// @brief `fusion` and `open3d_tsdf` behind model::ViewSynthesizer.
 #include "fusion/fusion_synthesizer.h"
 
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
 #include <stdexcept>
 #include <utility>
 
@@ -62,16 +65,61 @@ FusionSynthesizer::FusionSynthesizer(const scene::RgbdDataset& training, FusionO
   scene_.Prepare();  // the meshes belong to training, not to the first views
 }
 
+namespace {
+
+bool SameCamera(const scene::CameraInfo& a, const scene::CameraInfo& b) {
+  const auto near = [](double x, double y) { return std::fabs(x - y) <= 1e-3 * std::max(1.0, std::fabs(x)); };
+  return a.image_width == b.image_width && a.image_height == b.image_height && near(a.fx(), b.fx()) &&
+         near(a.fy(), b.fy()) && near(a.cx(), b.cx()) && near(a.cy(), b.cy());
+}
+
+std::string Describe(const scene::CameraInfo& c) {
+  char buf[160];
+  std::snprintf(buf, sizeof(buf), "%dx%d, f %.2f/%.2f, c %.2f/%.2f", c.image_width, c.image_height,
+                c.fx(), c.fy(), c.cx(), c.cy());
+  return buf;
+}
+
+/// Copies `filler`'s view at `pose` into `v` where `hole` (CV_8UC1) is set; the filler's invalid
+/// depth (0) stays 0. Returns the number of pixels coloured.
+int FillFrom(model::ViewSynthesizer& filler, const scene::Pose& pose, const scene::CameraInfo& camera,
+             const cv::Mat& hole, scene::RgbdSample* v) {
+  const scene::CameraInfo fc = filler.Camera();
+  if (!SameCamera(fc, camera)) {
+    throw std::invalid_argument("fusion hole filler (" + filler.Name() + ") renders at " + Describe(fc) +
+                                " but the view's camera is " + Describe(camera) +
+                                ": train or export it at the view's resolution, or drop the filler");
+  }
+  const scene::RgbdSample g = filler.Render(pose);
+  if (g.rgb.size() != hole.size() || g.rgb.type() != CV_8UC3 || g.depth.type() != CV_32FC1)
+    throw std::runtime_error("fusion hole filler (" + filler.Name() + ") returned a view of another size or type");
+  g.rgb.copyTo(v->rgb, hole);
+  g.depth.copyTo(v->depth, hole);
+  return cv::countNonZero(hole);
+}
+
+}  // namespace
+
 scene::RgbdSample FusionSynthesizer::RenderAt(const scene::Pose& pose, const scene::CameraInfo& camera) {
   CheckCamera(camera, "FusionSynthesizer::RenderAt");
   const ViewCandidates c = scene_.RenderCandidates(pose, camera);
   last_coverage_ = c.coverage;
+  last_filler_fraction_ = 0.0;
+  scene::RgbdSample v;
   if (refiner_) {
-    scene::RgbdSample v = refiner_->Refine(c);
+    v = refiner_->Refine(c);
     v.pose = pose;
-    return v;
+  } else {
+    v = ToView(pose, c.blended, c.depth, options_.fill_holes && !filler_, "fusion");
   }
-  return ToView(pose, c.blended, c.depth, options_.fill_holes, "fusion");
+  if (!filler_) return v;
+  const cv::Mat hole = c.depth <= 0.0f;
+  if (cv::countNonZero(hole) > 0) {
+    last_filler_fraction_ = FillFrom(*filler_, pose, camera, hole, &v) /
+                            (static_cast<double>(camera.image_width) * camera.image_height);
+  }
+  if (!refiner_ && options_.fill_holes) model::PushPullFillRgbd(v.rgb, v.depth, v.depth > 0.0f);
+  return v;
 }
 
 namespace {

@@ -33,7 +33,8 @@ struct FusionOptions {
 
 /// `fusion`. Built from training frames (all integrated and kept as keyframes) and fed more at
 /// any time with AddFrame. Render: RenderCandidates at the pose and the output camera, then the
-/// refiner when there is one, else the blend (8-bit) with the raycast depth, holes filled when
+/// refiner when there is one, else the blend (8-bit) with the raycast depth; the hole filler's
+/// view where the TSDF saw nothing (when one is set), then the remaining holes filled when
 /// fill_holes. Not thread-safe (ViewSynthesizer contract).
 class FusionSynthesizer : public model::ViewSynthesizer {
  public:
@@ -63,6 +64,14 @@ class FusionSynthesizer : public model::ViewSynthesizer {
   scene::RgbdSample RenderAt(const scene::Pose& pose, const scene::CameraInfo& camera);
 
   void SetRefiner(std::shared_ptr<ViewRefiner> refiner) { refiner_ = std::move(refiner); }
+  /// The pixels the TSDF never observed (no raycast hit) take `filler`'s view at the same pose
+  /// (issue 12 point 3: P2I-NET's G where geometry never saw the surface), RGB and depth; after
+  /// it, fill_holes' push-pull fills only what is still invalid (the filler's depth of 0). Its
+  /// Camera() must be the view's (size and intrinsics): a view at another camera throws
+  /// std::invalid_argument. nullptr = off (the default).
+  void SetHoleFiller(std::shared_ptr<model::ViewSynthesizer> filler) { filler_ = std::move(filler); }
+  /// Pixels of the last view that the hole filler coloured / all pixels (0 without a filler).
+  double LastFillerFraction() const { return last_filler_fraction_; }
   FusionScene& scene() { return scene_; }
   /// Coverage of the last rendered view; fraction of its pixels the TSDF never observed.
   const ViewCoverage& LastCoverage() const { return last_coverage_; }
@@ -73,6 +82,8 @@ class FusionSynthesizer : public model::ViewSynthesizer {
   FusionScene scene_;
   scene::CameraInfo output_camera_;
   std::shared_ptr<ViewRefiner> refiner_;
+  std::shared_ptr<model::ViewSynthesizer> filler_;
+  double last_filler_fraction_ = 0.0;
   ViewCoverage last_coverage_;
   std::vector<model::ViewGeometry> last_geometry_;  ///< of the last Render / RenderBatch
 };

@@ -4,6 +4,7 @@
 
 #include <sys/stat.h>
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <stdexcept>
@@ -14,6 +15,7 @@
 #include "fusion/fusion_synthesizer.h"
 #include "fusion/fusion_version_io.h"
 #include "model/learned_refiner.h"
+#include "model/p2i_synthesizer.h"
 #include "refine/leave_one_out.h"
 #include "scene/strict_yaml_reader.h"
 
@@ -75,14 +77,30 @@ std::shared_ptr<model::LearnedRefiner> BuildRefiner(const FusionRefineOptions& o
 /// The method built from a published version (the trainer node maps online): the version's
 /// refinement file when it has one, else `refine.net` as it is (fine-tuning is the mapper's, not
 /// repeated at every hot swap).
-std::unique_ptr<model::ViewSynthesizer> FromVersion(const model::MethodInputs& in,
-                                                    const fusion::FusionOptions& options,
-                                                    const FusionRefineOptions& refine) {
+std::unique_ptr<fusion::FusionSynthesizer> FromVersion(const model::MethodInputs& in,
+                                                      const fusion::FusionOptions& options,
+                                                      const FusionRefineOptions& refine) {
   fusion::LoadedFusionVersion v =
       fusion::LoadFusionVersion(in.checkpoint_path, options, in.width, in.height);
   const std::string net = !v.refine_path.empty() ? v.refine_path : refine.net;
   if (!net.empty()) v.synthesizer->SetRefiner(model::LearnedRefiner::Load(net, options.scene.blend.k));
   return std::move(v.synthesizer);
+}
+
+/// `p2i_fill: PATH`: resolved like refine.net and checked to be a file; "" when absent.
+std::string ReadP2iFill(const YAML::Node& options, const std::string& source) {
+  const YAML::Node n = options["p2i_fill"];
+  if (!n.IsDefined() || n.IsNull()) return "";
+  const scene::StrictYamlReader r(source);
+  const std::string given = r.String(n, "p2i_fill");
+  const std::string path = ResolveNet(given, source);
+  if (!IsFile(path)) {
+    r.Fail(n, "p2i_fill: no P2I-NET checkpoint '" + path + "'" +
+                  (given != path ? " ('" + given + "' relative to " + source + ")" : "") +
+                  ": give a `p2i train` checkpoint or `p2i export` file trained on the same frames "
+                  "at the view's resolution, or drop the key");
+  }
+  return path;
 }
 
 }  // namespace
@@ -138,6 +156,7 @@ const std::vector<std::string>& FusionMethodOptionKeys() {
   static const std::vector<std::string> keys = [] {
     std::vector<std::string> k = fusion::FusionOptionKeys();
     k.push_back("refine");
+    k.push_back("p2i_fill");
     return k;
   }();
   return keys;
@@ -146,6 +165,7 @@ const std::vector<std::string>& FusionMethodOptionKeys() {
 model::MethodFactory ConfigureFusionMethod(const YAML::Node& options, const std::string& source) {
   fusion::FusionOptions fusion_options;
   FusionRefineOptions refine;
+  std::string p2i_fill;
   if (options.IsDefined() && !options.IsNull()) {
     const std::vector<std::string>& keys = FusionMethodOptionKeys();
     scene::StrictYamlReader(source).CheckKeys(options, {keys.begin(), keys.end()}, "fusion options");
@@ -154,17 +174,30 @@ model::MethodFactory ConfigureFusionMethod(const YAML::Node& options, const std:
       refine = FusionRefineOptions::FromYaml(options["refine"], source);
       base.remove("refine");
     }
+    p2i_fill = ReadP2iFill(options, source);
+    base.remove("p2i_fill");
     fusion_options = fusion::FusionOptions::FromYaml(base, source);
     fusion_options.Validate();
   }
-  return [fusion_options, refine](const model::MethodInputs& in) -> std::unique_ptr<model::ViewSynthesizer> {
-    if (!in.checkpoint_path.empty()) return FromVersion(in, fusion_options, refine);
-    const scene::RgbdDataset& frames = model::RequireTrainingFrames(in, "fusion");
-    auto synth = std::make_unique<fusion::FusionSynthesizer>(frames, fusion_options);
-    if (refine.Enabled()) {
-      synth->SetRefiner(BuildRefiner(refine, fusion_options.scene, frames, synth->Camera(), in.threads));
+  return [fusion_options, refine, p2i_fill](const model::MethodInputs& in) -> std::unique_ptr<model::ViewSynthesizer> {
+    std::unique_ptr<fusion::FusionSynthesizer> built;
+    if (!in.checkpoint_path.empty()) {
+      built = FromVersion(in, fusion_options, refine);
+    } else {
+      const scene::RgbdDataset& frames = model::RequireTrainingFrames(in, "fusion");
+      auto synth = std::make_unique<fusion::FusionSynthesizer>(frames, fusion_options);
+      if (refine.Enabled()) {
+        synth->SetRefiner(BuildRefiner(refine, fusion_options.scene, frames, synth->Camera(), in.threads));
+      }
+      built = std::move(synth);
     }
-    return synth;
+    if (!p2i_fill.empty()) {
+      model::SynthesizerOptions so;
+      so.threads = std::max(1, in.threads);
+      std::shared_ptr<model::ViewSynthesizer> g = model::LoadSynthesizer(p2i_fill, so);
+      built->SetHoleFiller(std::move(g));
+    }
+    return built;
   };
 }
 

@@ -44,7 +44,10 @@ struct FusionRefineOptions {
   void Validate() const;
 };
 
-/// The fusion method's option keys: fusion::FusionOptionKeys() plus "refine".
+/// The fusion method's option keys: fusion::FusionOptionKeys() plus "refine" and "p2i_fill" (a
+/// P2I-NET checkpoint trained on the same frames at the view's resolution: its G (+ ENET) view
+/// fills the pixels the TSDF never observed, FusionSynthesizer::SetHoleFiller; a relative path is
+/// resolved like refine.net).
 const std::vector<std::string>& FusionMethodOptionKeys();
 
 /// Reads {tsdf, blend, fill_holes, refine} (null = defaults: no refinement), checks them once and

@@ -91,6 +91,90 @@ TEST_CASE("fusion: frames added online change what it renders", "[unit]") {
   CHECK(v.rgb.size() == cv::Size(48, 48));
 }
 
+/// A hole filler that paints one colour and one depth, with depth 0 (invalid) in column 0.
+class FlatFiller : public model::ViewSynthesizer {
+ public:
+  explicit FlatFiller(scene::CameraInfo camera) : camera_(camera) {}
+  std::string Name() const override { return "flat"; }
+  scene::CameraInfo Camera() const override { return camera_; }
+  scene::RgbdSample Render(const scene::Pose& pose) override {
+    ++renders;
+    scene::RgbdSample v;
+    v.pose = pose;
+    v.rgb = cv::Mat(camera_.image_height, camera_.image_width, CV_8UC3, cv::Scalar(10, 200, 30));
+    v.depth = cv::Mat(camera_.image_height, camera_.image_width, CV_32FC1, cv::Scalar(2.5f));
+    v.depth.col(0).setTo(0.0f);
+    return v;
+  }
+  int renders = 0;
+
+ private:
+  scene::CameraInfo camera_;
+};
+
+TEST_CASE("fusion: a hole filler colours only what the TSDF never observed", "[unit]") {
+  const auto sim = scene::SimScene::BuiltIn("small_office");
+  const scene::RgbdDataset all = Sweep(sim, 48, 6);
+  scene::RgbdDataset first{all.camera, {}};
+  first.frames.assign(all.frames.begin(), all.frames.begin() + 3);
+  FusionOptions raw;
+  raw.fill_holes = false;
+  FusionSynthesizer plain(first, raw);
+  // The first later frame whose view the 3 fused frames cover only in part.
+  scene::Pose late;
+  scene::RgbdSample p;
+  for (size_t i = 3; i < all.frames.size(); ++i) {
+    late = all.frames[i].pose;
+    p = plain.Render(late);
+    if (plain.LastHoleFraction() > 0.2 && plain.LastHoleFraction() < 0.8) break;
+  }
+  const cv::Mat hole = p.depth <= 0.0f;
+  const int holes = cv::countNonZero(hole);
+  REQUIRE(holes > 48 * 48 / 10);
+  REQUIRE(holes < 48 * 48);
+
+  FusionSynthesizer filled(first, raw);
+  auto filler = std::make_shared<FlatFiller>(all.camera);
+  filled.SetHoleFiller(filler);
+  const scene::RgbdSample f = filled.Render(late);
+  CHECK(filler->renders == 1);
+  CHECK(filled.LastFillerFraction() == Approx(holes / (48.0 * 48.0)));
+  int wrong_hole = 0, wrong_observed = 0;
+  for (int v = 0; v < 48; ++v) {
+    for (int u = 0; u < 48; ++u) {
+      const cv::Vec3b c = f.rgb.at<cv::Vec3b>(v, u);
+      if (hole.at<uint8_t>(v, u)) {
+        const float want = u == 0 ? 0.0f : 2.5f;
+        if (c != cv::Vec3b(10, 200, 30) || f.depth.at<float>(v, u) != want) ++wrong_hole;
+      } else if (c != p.rgb.at<cv::Vec3b>(v, u) || f.depth.at<float>(v, u) != p.depth.at<float>(v, u)) {
+        ++wrong_observed;
+      }
+    }
+  }
+  CHECK(wrong_hole == 0);
+  CHECK(wrong_observed == 0);
+
+  // With fill_holes, push-pull fills only what the filler left invalid (its column 0).
+  FusionSynthesizer both(first);
+  both.SetHoleFiller(filler);
+  const scene::RgbdSample b = both.Render(late);
+  CHECK(cv::countNonZero(b.depth > 0.0f) == 48 * 48);
+  int flat = 0;
+  for (int v = 0; v < 48; ++v)
+    for (int u = 1; u < 48; ++u)
+      if (hole.at<uint8_t>(v, u) && b.rgb.at<cv::Vec3b>(v, u) == cv::Vec3b(10, 200, 30)) ++flat;
+  CHECK(flat == cv::countNonZero(hole.colRange(1, 48)));
+
+  // A filler at another camera is refused when a view needs it, naming both cameras.
+  FusionSynthesizer wrong(first, raw);
+  wrong.SetHoleFiller(std::make_shared<FlatFiller>(scene::SimScene::DefaultCamera(64, 64)));
+  CHECK_THROWS_WITH(wrong.Render(late), Catch::Contains("hole filler") && Catch::Contains("64x64") &&
+                                            Catch::Contains("48x48"));
+  // No filler: LastFillerFraction stays 0.
+  plain.Render(late);
+  CHECK(plain.LastFillerFraction() == 0.0);
+}
+
 TEST_CASE("fusion: LastGeometry gives each view's observed fraction and keyframe angle, in batch order", "[unit]") {
   const auto sim = scene::SimScene::BuiltIn("small_office");
   const scene::RgbdDataset train = Sweep(sim, 48, 8);

@@ -19,6 +19,7 @@
 
 #include "model/learned_refiner.h"
 #include "model/method_registry.h"
+#include "model/p2i_synthesizer.h"
 #include "refine/sim_scenes.h"
 #include "scene/sim_scene.h"
 #include "scene/trajectory.h"
@@ -119,6 +120,47 @@ TEST_CASE("fusion with refine.net loads the shipped refinement and refines the v
   // The shipped net is for k = 4: another blend k is refused, naming the layout.
   CHECK_THROWS_WITH(Configure("{blend: {k: 2}, refine: {net: " + kShippedNet + "}}")(in),
                     Catch::Contains("k2") || Catch::Contains("layout"));
+}
+
+TEST_CASE("fusion p2i_fill: P2I-NET's view fills the pixels the TSDF never observed", "[unit]") {
+  const std::string ckpt = std::string(P2I_SOURCE_DIR) + "/models/demo_small_office_64.pt";
+  const scene::CameraInfo camera = model::LoadSynthesizer(ckpt)->Camera();  // 64x64, f = 70
+  const scene::SimScene sim = scene::SimScene::BuiltIn("small_office");
+  const auto poses = scene::GenerateArmSweep({});
+  model::MethodInputs in;
+  auto d = std::make_shared<scene::RgbdDataset>();
+  d->camera = camera;
+  for (size_t i = 0; i < 3; ++i) d->frames.push_back(sim.Render(poses[i * 6].pose, camera, poses[i * 6].stamp));
+  in.training = d;
+  auto plain = Configure("{fill_holes: false}")(in);
+  auto filled = Configure("{fill_holes: false, p2i_fill: " + ckpt + "}")(in);
+  // The first later pose whose view the three fused frames cover only in part.
+  scene::Pose far;
+  scene::RgbdSample a;
+  for (size_t i = 13; i < poses.size(); i += 2) {
+    far = poses[i].pose;
+    a = plain->Render(far);
+    const double holes = cv::countNonZero(a.depth <= 0.0f) / static_cast<double>(a.depth.total());
+    if (holes > 0.2 && holes < 0.8) break;
+  }
+  const scene::RgbdSample b = filled->Render(far);
+  const scene::RgbdSample g = model::LoadSynthesizer(ckpt)->Render(far);
+  const cv::Mat hole = a.depth <= 0.0f;
+  REQUIRE(cv::countNonZero(hole) > static_cast<int>(a.depth.total() / 10));
+  REQUIRE(cv::countNonZero(hole) < static_cast<int>(a.depth.total()));
+  cv::Mat diff_hole, diff_seen;
+  cv::absdiff(b.rgb, g.rgb, diff_hole);
+  cv::absdiff(b.rgb, a.rgb, diff_seen);
+  CHECK(cv::norm(diff_hole, cv::NORM_L1, hole) == 0.0);    // holes: G's pixels
+  CHECK(cv::norm(diff_seen, cv::NORM_L1, ~hole) == 0.0);   // observed: the blend's
+  CHECK(cv::norm(b.rgb, a.rgb, cv::NORM_L1) > 0.0);
+  // Bad paths and a filler at another camera are errors that name the key.
+  CHECK_THROWS_WITH(Configure("{p2i_fill: /nonexistent/g.pt}", "bench.yaml"),
+                    Catch::Contains("p2i_fill") && Catch::Contains("/nonexistent/g.pt"));
+  model::MethodInputs other;
+  other.training = Sweep(6, 3, 48, 48);
+  auto mismatched = Configure("{p2i_fill: " + ckpt + "}")(other);
+  CHECK_THROWS_WITH(mismatched->Render(far), Catch::Contains("hole filler") && Catch::Contains("48x48"));
 }
 
 TEST_CASE("fusion with refine.finetune_steps fine-tunes a fresh net on its own leave-one-out frames", "[unit]") {
