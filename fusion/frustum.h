@@ -4,6 +4,8 @@
 /// (surface_mesh.cc).
 #pragma once
 
+#include <cmath>
+
 namespace p2i::fusion {
 
 /// `centre` of the sphere in the camera frame (x right, y down, z forward), its `radius`; the view
@@ -18,6 +20,23 @@ bool SphereMayBeInView(const Vec& centre, T radius, T z_near, T z_far, T fx, T f
   const T u = fx * centre.x() / z + cx, v = fy * centre.y() / z + cy;
   const T mu = fx * radius / (z - radius) + T(1), mv = fy * radius / (z - radius) + T(1);
   return !(u < -mu || u > w + mu || v < -mv || v > h + mv);
+}
+
+/// The pixel box [u0, u1] x [v0, v1] (clamped to the image) a sphere that SphereMayBeInView can
+/// cover, conservatively; the whole image when the sphere reaches the camera plane.
+template <typename Vec, typename T>
+void SphereScreenBox(const Vec& centre, T radius, T fx, T fy, T cx, T cy, int w, int h, int* u0,
+                     int* u1, int* v0, int* v1) {
+  *u0 = 0, *u1 = w - 1, *v0 = 0, *v1 = h - 1;
+  const T z = centre.z();
+  if (z <= radius) return;
+  const T u = fx * centre.x() / z + cx, v = fy * centre.y() / z + cy;
+  const T mu = fx * radius / (z - radius) + T(1), mv = fy * radius / (z - radius) + T(1);
+  const auto clamp = [](T x, int lo, int hi) {
+    return x < T(lo) ? lo : (x > T(hi) ? hi : static_cast<int>(x));
+  };
+  *u0 = clamp(std::floor(u - mu), 0, w - 1), *u1 = clamp(std::ceil(u + mu), 0, w - 1);
+  *v0 = clamp(std::floor(v - mv), 0, h - 1), *v1 = clamp(std::ceil(v + mv), 0, h - 1);
 }
 
 }  // namespace p2i::fusion

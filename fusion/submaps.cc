@@ -113,8 +113,9 @@ int64_t FillMissingFrom(TsdfVolume& volume, const scene::Pose& pose, const scene
   if (cv::countNonZero(missing) == 0) return 0;
   const cv::Rect box = cv::boundingRect(missing);
   TsdfRaycast roi{into->depth(box), into->normals(box), into->colour(box)};  // views into `into`
-  const int64_t n =
-      FillMissingSurface(&roi, volume.Raycast(pose, camera.Cropped(box.x, box.y, box.width, box.height)));
+  const cv::Mat only = missing(box);
+  const int64_t n = FillMissingSurface(
+      &roi, volume.Raycast(pose, camera.Cropped(box.x, box.y, box.width, box.height), &only));
   if (filled) (*filled)(box).setTo(255, missing(box) & (roi.depth > 0.0f));
   return n;
 }

@@ -93,8 +93,8 @@ class SubmapSet {
 int64_t FillMissingSurface(TsdfRaycast* into, const TsdfRaycast& from);
 
 /// Pixels of `into` (a view at `pose` through `camera`) without a surface take it from `volume`,
-/// raycast only through the bounding rectangle of those pixels (a mesh raster culls what lies
-/// outside it). `*filled` (optional, CV_8UC1 of the view's size) gets 255 where a pixel was
+/// raycast only through the bounding rectangle of those pixels; a mesh surface draws only the
+/// missing pixels themselves (chunks and triangles over pixels that have one are skipped). `*filled` (optional, CV_8UC1 of the view's size) gets 255 where a pixel was
 /// filled. Returns how many were; 0 without a raycast when none is missing.
 int64_t FillMissingFrom(TsdfVolume& volume, const scene::Pose& pose, const scene::CameraInfo& camera,
                         TsdfRaycast* into, cv::Mat* filled = nullptr);

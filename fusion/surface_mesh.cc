@@ -10,6 +10,8 @@
 #include <string>
 #include <unordered_map>
 
+#include <opencv2/imgproc.hpp>
+
 #include "fusion/frustum.h"
 
 namespace p2i::fusion {
@@ -109,16 +111,39 @@ struct SurfaceMesh::View {
   std::vector<ViewVertex> verts;
   std::vector<float> zbuf;       // nearest front-face depth per pixel
   std::vector<int64_t> id;       // its triangle: chunk << 32 | triangle in chunk; -1 = none
+  const uint8_t* only = nullptr;  // pixels to draw (non-zero), row stride w; null = all
+  cv::Mat only_sum;              // integral image of `only` != 0 (CV_32S, (h + 1) x (w + 1))
+
+  /// Whether the box [u0, u1] x [v0, v1] (inside the image) holds a pixel to draw.
+  bool AnyToDraw(int u0, int u1, int v0, int v1) const {
+    if (only == nullptr) return true;
+    const int* top = only_sum.ptr<int>(v0);
+    const int* bottom = only_sum.ptr<int>(v1 + 1);
+    return bottom[u1 + 1] - bottom[u0] - top[u1 + 1] + top[u0] > 0;
+  }
 };
 
 void SurfaceMesh::Rasterize(const scene::Pose& pose, const scene::CameraInfo& camera, float depth_min,
-                            float depth_max, TsdfRaycast* out) const {
+                            float depth_max, TsdfRaycast* out, const cv::Mat* only) const {
   const int w = camera.image_width, h = camera.image_height;
   out->depth = cv::Mat::zeros(h, w, CV_32FC1);
   out->normals = cv::Mat::zeros(h, w, CV_32FC3);
   out->colour = cv::Mat::zeros(h, w, CV_32FC3);
   if (w <= 0 || h <= 0) return;
   View view;
+  cv::Mat only_bytes;
+  if (only != nullptr) {
+    if (only->type() != CV_8UC1 || only->cols != w || only->rows != h)
+      throw std::invalid_argument("SurfaceMesh::Rasterize: the mask of pixels to draw must be CV_8UC1 " +
+                                  std::to_string(w) + "x" + std::to_string(h) + ", got type " +
+                                  std::to_string(only->type()) + " " + std::to_string(only->cols) + "x" +
+                                  std::to_string(only->rows));
+    only_bytes = only->isContinuous() ? *only : only->clone();
+    if (cv::countNonZero(only_bytes) == 0) return;
+    cv::integral(only_bytes != 0, view.only_sum, CV_32S);
+    view.only_sum /= 255;  // != 0 gives 255 per pixel
+    view.only = only_bytes.ptr<uint8_t>(0);
+  }
   const Eigen::Matrix4d cw = pose.Inverse().ToMatrix();
   view.r = cw.block<3, 3>(0, 0).cast<float>();
   view.t = cw.block<3, 1>(0, 3).cast<float>();
@@ -140,6 +165,12 @@ void SurfaceMesh::CullAndTransform(View* view) const {
     if (!SphereMayBeInView(Eigen::Vector3f(v.r * ch.centre + v.t), ch.radius, v.depth_min, v.depth_max,
                            v.fx, v.fy, v.cx, v.cy, v.w, v.h))
       continue;
+    if (v.only != nullptr) {
+      int u0, u1, v0, v1;
+      SphereScreenBox(Eigen::Vector3f(v.r * ch.centre + v.t), ch.radius, v.fx, v.fy, v.cx, v.cy, v.w,
+                      v.h, &u0, &u1, &v0, &v1);
+      if (!v.AnyToDraw(u0, u1, v0, v1)) continue;
+    }
     v.offset[ci] = static_cast<int64_t>(v.verts.size());
     v.visible.push_back(static_cast<int32_t>(ci));
     for (int64_t i = ch.vertex_begin; i < ch.vertex_end; ++i) {
@@ -173,6 +204,7 @@ void SurfaceMesh::DrawFrontFaces(View* view) const {
       const int v0 = std::max(0, static_cast<int>(std::ceil(std::min({a.y, b.y, c.y}))));
       const int v1 = std::min(h - 1, static_cast<int>(std::floor(std::max({a.y, b.y, c.y}))));
       if (v0 > v1) continue;
+      if (!vw.AnyToDraw(u0, u1, v0, v1)) continue;
       const float s = area > 0.0f ? 1.0f : -1.0f, inv_area = 1.0f / std::fabs(area);
       const float iza = 1.0f / a.z, izb = 1.0f / b.z, izc = 1.0f / c.z;
       const int64_t tag = (static_cast<int64_t>(ci) << 32) | (tr - ch.triangle_begin);
@@ -190,6 +222,7 @@ void SurfaceMesh::DrawFrontFaces(View* view) const {
           if (!(iz > 0.0f)) continue;
           const float z = 1.0f / iz;
           const size_t i = static_cast<size_t>(v) * w + u;
+          if (vw.only != nullptr && vw.only[i] == 0) continue;
           if (z < vw.zbuf[i] && z <= vw.depth_max) {
             vw.zbuf[i] = z;
             vw.id[i] = tag;

@@ -39,8 +39,11 @@ class SurfaceMesh {
   /// camera, as a raycast only meets the TSDF going from its positive to its negative side) with
   /// depth in [depth_min, depth_max]; 0 elsewhere. Triangles with a vertex nearer than depth_min
   /// are skipped (not clipped). `out`'s maps are allocated here.
+  /// `only` (optional, CV_8UC1 of the camera's size): draw only the pixels where it is non-zero;
+  /// the others stay 0, and chunks and triangles whose screen box holds none of them are skipped
+  /// (filling the pixels another surface left empty costs what those pixels need, not a view).
   void Rasterize(const scene::Pose& pose, const scene::CameraInfo& camera, float depth_min,
-                 float depth_max, TsdfRaycast* out) const;
+                 float depth_max, TsdfRaycast* out, const cv::Mat* only = nullptr) const;
 
   int64_t triangles() const { return triangle_count_; }
   int64_t vertices() const { return static_cast<int64_t>(pos_.size()); }

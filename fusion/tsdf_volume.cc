@@ -375,7 +375,8 @@ void CopyHits(const float* dp, const float* np, const float* cp, const scene::Po
 
 }  // namespace
 
-TsdfRaycast TsdfVolume::Raycast(const scene::Pose& pose, const scene::CameraInfo& camera) {
+TsdfRaycast TsdfVolume::Raycast(const scene::Pose& pose, const scene::CameraInfo& camera,
+                                const cv::Mat* only) {
   const int w = camera.image_width, h = camera.image_height;
   TsdfRaycast out;
   out.depth = cv::Mat::zeros(h, w, CV_32FC1);
@@ -388,7 +389,7 @@ TsdfRaycast TsdfVolume::Raycast(const scene::Pose& pose, const scene::CameraInfo
   if (map.Size() == 0) return out;
   if (options_.surface == "mesh") {
     impl_->Mesh(options_).Rasterize(pose, camera, static_cast<float>(options_.depth_min_m),
-                                    static_cast<float>(options_.depth_max_m), &out);
+                                    static_cast<float>(options_.depth_max_m), &out, only);
     return out;
   }
 

@@ -90,8 +90,11 @@ class TsdfVolume {
   void Integrate(const scene::RgbdSample& frame, const scene::CameraInfo& camera);
 
   /// Raycasts the fused surface seen from `pose` through `camera` (any size and intrinsics).
-  /// An empty volume gives all-zero maps.
-  TsdfRaycast Raycast(const scene::Pose& pose, const scene::CameraInfo& camera);
+  /// An empty volume gives all-zero maps. `only` (optional, CV_8UC1 of the camera's size): the
+  /// pixels wanted (non-zero); the others may be 0. Surface "mesh" then draws only those (its cost
+  /// follows them); surface "raycast" casts every ray.
+  TsdfRaycast Raycast(const scene::Pose& pose, const scene::CameraInfo& camera,
+                      const cv::Mat* only = nullptr);
 
   /// Builds what Raycast reuses between changes of the volume (the mesh of surface "mesh", the
   /// trilinear field of refine_hits) now, so a caller that loads a volume in the background pays

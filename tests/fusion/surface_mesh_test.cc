@@ -1,6 +1,7 @@
 /// @file surface_mesh_test.cc
 /// @brief SurfaceMesh: the z-buffer gives exact depth, normals and colour of known triangles,
-/// front faces only, no crack along shared edges, and chunk culling loses nothing.
+/// front faces only, no crack along shared edges, chunk culling loses nothing, and a mask of
+/// pixels to draw gives exactly those pixels.
 #include <cmath>
 #include <vector>
 
@@ -121,6 +122,57 @@ TEST_CASE("SurfaceMesh: the nearest front face wins, depth range and near triang
   TsdfRaycast d;
   fine.Rasterize(At(0.1, 0, 0), cam, 1.6f, 5.0f, &d);
   CHECK(d.depth.at<float>(20, 20) == Approx(3.0f).margin(1e-4));
+}
+
+TEST_CASE("SurfaceMesh: a mask of pixels to draw gives the full view's values there and nothing else", "[unit]") {
+  Grid g = PlaneGrid(3.0f, 5.0f, 24, true, false);
+  const Grid near = PlaneGrid(1.5f, 0.3f, 6, true, false);
+  const int64_t base = static_cast<int64_t>(g.pos.size());
+  g.pos.insert(g.pos.end(), near.pos.begin(), near.pos.end());
+  g.nrm.insert(g.nrm.end(), near.nrm.begin(), near.nrm.end());
+  g.col.insert(g.col.end(), near.col.begin(), near.col.end());
+  for (int64_t i : near.tri) g.tri.push_back(base + i);
+  const SurfaceMesh mesh(g.pos, g.nrm, g.col, g.tri, 0.25f);
+  const auto cam = Cam(40, 40, 40);
+  const scene::Pose pose = At(0.1, 0.05, 0);
+  TsdfRaycast full;
+  mesh.Rasterize(pose, cam, 0.1f, 5.0f, &full);
+  REQUIRE(cv::countNonZero(full.depth) == 40 * 40);
+  // Scattered pixels, a block in a corner and the near square's edge (both surfaces meet there).
+  cv::Mat only = cv::Mat::zeros(40, 40, CV_8UC1);
+  for (int i = 0; i < 40 * 40; i += 13) only.at<uint8_t>(i / 40, i % 40) = 1;
+  only(cv::Rect(33, 0, 7, 5)).setTo(200);
+  only.row(20).setTo(7);
+  TsdfRaycast part;
+  mesh.Rasterize(pose, cam, 0.1f, 5.0f, &part, &only);
+  const cv::Mat drawn = part.depth > 0.0f;
+  CHECK(cv::countNonZero(drawn) == cv::countNonZero(only));
+  CHECK(cv::countNonZero(drawn & (only == 0)) == 0);
+  cv::Mat masked_depth, masked_normals, masked_colour;
+  full.depth.copyTo(masked_depth, only);
+  full.normals.copyTo(masked_normals, only);
+  full.colour.copyTo(masked_colour, only);
+  CHECK(cv::norm(part.depth, masked_depth, cv::NORM_INF) == 0.0);
+  CHECK(cv::norm(part.normals, masked_normals, cv::NORM_INF) == 0.0);
+  CHECK(cv::norm(part.colour, masked_colour, cv::NORM_INF) == 0.0);
+  // Both surfaces appear among the drawn pixels (row 20 crosses the near square).
+  CHECK(part.depth.at<float>(20, 20) == Approx(1.5f).margin(1e-4));
+  CHECK(part.depth.at<float>(2, 36) == Approx(3.0f).margin(1e-4));
+  // A submatrix (not continuous) works the same; an empty mask draws nothing.
+  cv::Mat big = cv::Mat::zeros(50, 60, CV_8UC1);
+  only.copyTo(big(cv::Rect(10, 5, 40, 40)));
+  const cv::Mat roi = big(cv::Rect(10, 5, 40, 40));
+  TsdfRaycast again;
+  mesh.Rasterize(pose, cam, 0.1f, 5.0f, &again, &roi);
+  CHECK(cv::norm(again.depth, part.depth, cv::NORM_INF) == 0.0);
+  const cv::Mat none = cv::Mat::zeros(40, 40, CV_8UC1);
+  mesh.Rasterize(pose, cam, 0.1f, 5.0f, &again, &none);
+  CHECK(cv::countNonZero(again.depth) == 0);
+  // A mask of another size or type is refused, naming what it needs.
+  const cv::Mat small = cv::Mat::ones(20, 40, CV_8UC1);
+  CHECK_THROWS_WITH(mesh.Rasterize(pose, cam, 0.1f, 5.0f, &again, &small), Catch::Contains("40x40"));
+  const cv::Mat floats = cv::Mat::ones(40, 40, CV_32FC1);
+  CHECK_THROWS_WITH(mesh.Rasterize(pose, cam, 0.1f, 5.0f, &again, &floats), Catch::Contains("CV_8UC1"));
 }
 
 TEST_CASE("SurfaceMesh: an empty mesh draws nothing, inconsistent arrays are refused", "[unit]") {
