@@ -13,13 +13,16 @@
 ///
 /// Usage: OMP_NUM_THREADS=1 fusion_bench [--scene small_office] [--frames 40] [--views 30]
 ///                                       [--net models/refine_sim.pt] [--json fusion_bench.json]
-///                                       [--stages-only]
+///                                       [--stages-only] [--row LABEL [--repeat N]]
+/// (--row: one render row at both sizes, nothing else, each test pose rendered N times: for a
+/// profiler, e.g. `perf record build/bin/fusion_bench --row submaps_20 --repeat 20`)
 /// OMP_NUM_THREADS=1 makes Open3D's kernels and LibTorch use one thread (both read it at start).
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <stdexcept>
 #include <iostream>
 #include <memory>
 #include <string>
@@ -55,6 +58,8 @@ struct Args {
   std::string net;  ///< refinement file ("" = no refined rows)
   std::string json = "fusion_bench.json";
   bool stages_only = false;  ///< only the stage breakdown (for a profiler)
+  std::string row;           ///< only this render row (both sizes), no integration or stages
+  int repeat = 1;            ///< renders of each test pose per row (a profiler wants many)
 };
 
 bool ParseArgs(int argc, char** argv, Args* a) {
@@ -71,6 +76,10 @@ bool ParseArgs(int argc, char** argv, Args* a) {
       a->net = argv[++i];
     } else if (k == "--json" && has) {
       a->json = argv[++i];
+    } else if (k == "--row" && has) {
+      a->row = argv[++i];
+    } else if (k == "--repeat" && has) {
+      a->repeat = std::max(1, std::atoi(argv[++i]));
     } else if (k == "--stages-only") {
       a->stages_only = true;
     } else {
@@ -135,7 +144,7 @@ nlohmann::json BenchIntegration(const p2i::scene::RgbdDataset& train, int block_
 /// time over the test poses.
 nlohmann::json BenchRender(const std::string& label, const std::string& options,
                            const p2i::scene::RgbdDataset& train, const std::vector<p2i::scene::Pose>& test,
-                           int w, int h) {
+                           int w, int h, int repeat) {
   auto frames = std::make_shared<p2i::scene::RgbdDataset>(p2i::scene::CenterCropResizeDataset(train, w, h));
   p2i::model::MethodInputs in;
   in.training = frames;
@@ -145,13 +154,14 @@ nlohmann::json BenchRender(const std::string& label, const std::string& options,
   synth->Render(test.front());  // warm-up (first allocations, LibTorch's first call)
   std::vector<double> ms;
   double observed = 0.0;
-  for (const auto& pose : test) {
-    const auto a = Clock::now();
-    synth->Render(pose);
-    ms.push_back(Ms(a, Clock::now()));
-    const auto g = synth->LastGeometry();
-    if (!g.empty()) observed += g.front().observed_fraction;
-  }
+  for (int r = 0; r < repeat; ++r)
+    for (const auto& pose : test) {
+      const auto a = Clock::now();
+      synth->Render(pose);
+      ms.push_back(Ms(a, Clock::now()));
+      const auto g = synth->LastGeometry();
+      if (!g.empty()) observed += g.front().observed_fraction / repeat;
+    }
   const double p50 = Median(ms);
   const double p99 = p2i::util::PercentileNearestRank(ms, 99.0);
   std::printf("%-22s %4dx%-4d %9.1f %9.1f %9.1f %10.0f %9.3f\n", label.c_str(), w, h, p50, p99,
@@ -220,7 +230,7 @@ int main(int argc, char** argv) {
   Args a;
   if (!ParseArgs(argc, argv, &a)) {
     std::cerr << "usage: OMP_NUM_THREADS=1 fusion_bench [--scene NAME] [--frames N] [--views N] "
-                 "[--net FILE] [--json FILE] [--stages-only]\n";
+                 "[--net FILE] [--json FILE] [--stages-only] [--row LABEL [--repeat N]]\n";
     return 2;
   }
   try {
@@ -235,8 +245,10 @@ int main(int argc, char** argv) {
     out["omp_num_threads"] = omp ? omp : "";
     const std::vector<std::pair<int, int>> sizes = {{128, 128}, {320, 240}};
     if (!a.stages_only) {
-      out["integration"] = BenchIntegration(train, 16);  // TsdfOptions' default
-      out["integration_block8"] = BenchIntegration(train, 8);
+      if (a.row.empty()) {
+        out["integration"] = BenchIntegration(train, 16);  // TsdfOptions' default
+        out["integration_block8"] = BenchIntegration(train, 8);
+      }
       std::printf("%-22s %9s %9s %9s %9s %10s %9s\n", "row", "size", "p50_ms", "p99_ms", "views/s",
                   "build_ms", "observed");
       struct Row { std::string label, options; };
@@ -246,11 +258,24 @@ int main(int argc, char** argv) {
                                {"blend_raycast_no_refine", "{tsdf: {surface: raycast, refine_hits: false}}"},
                                {"blend_block8", "{tsdf: {block_resolution: 8}}"},
                                {"submaps_10", "{submaps: {frames: 10}}"},
-                               {"submaps_10_render1", "{submaps: {frames: 10, render: 1}}"}};
+                               {"submaps_10_render1", "{submaps: {frames: 10, render: 1}}"},
+                               {"submaps_20", "{submaps: {frames: 20}}"},
+                               {"submaps_20_render1", "{submaps: {frames: 20, render: 1}}"}};
       if (!a.net.empty()) rows.push_back({"refined (zero-shot)", "{refine: {net: '" + a.net + "'}}"});
+      if (!a.row.empty()) {
+        const auto it = std::find_if(rows.begin(), rows.end(), [&](const Row& r) { return r.label == a.row; });
+        if (it == rows.end()) throw std::runtime_error("--row " + a.row + ": no such row (see the table's first column)");
+        rows = {*it};
+      }
       for (const auto& size : sizes)
         for (const Row& r : rows)
-          out["render"].push_back(BenchRender(r.label, r.options, train, test, size.first, size.second));
+          out["render"].push_back(
+              BenchRender(r.label, r.options, train, test, size.first, size.second, a.repeat));
+    }
+    if (!a.row.empty()) {
+      std::ofstream(a.json) << out.dump(2) << "\n";
+      std::printf("wrote %s\n", a.json.c_str());
+      return 0;
     }
     std::printf("stages (median ms per view, cumulative):\n");
     for (const auto& size : sizes)

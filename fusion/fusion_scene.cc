@@ -12,6 +12,7 @@
 
 #include <Eigen/Geometry>
 
+#include "fusion/fast_angle.h"
 #include "fusion/keyframe_sampling.h"
 #include "model/coverage.h"
 #include "scene/strict_yaml_reader.h"
@@ -151,7 +152,7 @@ class KeyframeBlender {
       const Eigen::Vector3f to_k = s.centre - xw;  // point -> keyframe camera
       const float dist_k = to_k.norm();
       const Eigen::Vector3f dir_k = -to_k / dist_k;  // keyframe camera -> point
-      const float a = std::atan2(dir.cross(dir_k).norm(), dir.dot(dir_k));
+      const float a = AngleFromSinCos(dir.cross(dir_k).norm(), dir.dot(dir_k));
       const float res = std::max(0.0f, (dist_k - dist0) / dist0);
       pen_[j] = a + res_w_ * res;
       ang_[j] = a;
