@@ -6,6 +6,9 @@
 #include <cstdio>
 #include <filesystem>
 #include <stdexcept>
+#include <string>
+#include <system_error>
+#include <vector>
 
 #include "scene/capture.h"
 #include "scene/image_ops.h"
@@ -13,6 +16,36 @@
 namespace p2i::fusion {
 
 namespace fs = std::filesystem;
+
+namespace {
+
+/// Per submap of `m`: the file of the same submap in the version folder `previous` when it holds
+/// the same number of frames there (unchanged since), else "". All "" without a readable
+/// previous version.
+std::vector<std::string> UnchangedSubmapFiles(const std::string& previous,
+                                              const model::FusionVersionManifest& m) {
+  std::vector<std::string> out(m.submap_files.size());
+  if (previous.empty()) return out;
+  model::FusionVersionManifest p;
+  try {
+    p = model::ReadFusionVersion(previous);
+  } catch (const std::exception&) {
+    return out;  // pruned or unreadable: every submap is written
+  }
+  if (p.voxel_size_m != m.voxel_size_m || p.block_resolution != m.block_resolution ||
+      p.trunc_voxels != m.trunc_voxels)
+    return out;
+  for (size_t i = 0; i < out.size() && i < p.submap_files.size(); ++i) {
+    if (i >= p.submap_frame_counts.size() || p.submap_frame_counts[i] != m.submap_frame_counts[i])
+      continue;
+    const fs::path file = fs::path(previous) / p.submap_files[i];
+    std::error_code ec;
+    if (fs::is_regular_file(file, ec)) out[i] = file.string();
+  }
+  return out;
+}
+
+}  // namespace
 
 std::string WriteSceneVersion(const std::string& versions_dir, FusionScene& scene,
                               const FusionVersionInfo& info) {
@@ -44,10 +77,15 @@ std::string WriteSceneVersion(const std::string& versions_dir, FusionScene& scen
   }
   const std::string dir = model::FusionVersionDir(versions_dir, info.version);
   fs::create_directories(versions_dir);
+  const std::vector<std::string> reusable = UnchangedSubmapFiles(info.previous_dir, m);
   model::WriteFusionVersion(dir, m, [&](const std::string& temp) {
     scene.tsdf().Save(temp + "/" + m.tsdf_file);
-    for (size_t i = 0; i < m.submap_files.size(); ++i)
-      scene.submaps()->volume(i).Save(temp + "/" + m.submap_files[i]);
+    for (size_t i = 0; i < m.submap_files.size(); ++i) {
+      const std::string to = temp + "/" + m.submap_files[i];
+      std::error_code ec;
+      if (!reusable[i].empty()) fs::create_hard_link(reusable[i], to, ec);
+      if (reusable[i].empty() || ec) scene.submaps()->volume(i).Save(to);
+    }
     if (!info.refine_source.empty())
       fs::copy_file(info.refine_source, temp + "/" + m.refine_file);
   });

@@ -22,11 +22,16 @@ struct FusionVersionInfo {
   uint64_t keyframe_count = 0;  ///< its first frames that belong to this version
   std::string refine_source;    ///< a refinement file copied into the version ("" = none)
   int64_t refine_steps = 0;     ///< optimiser steps it has seen (the manifest's `step`)
+  /// A version folder this writer committed earlier from the same scene ("" = none). A submap
+  /// with the same index and frame count there is unchanged (a submap changes only by fusing a
+  /// frame), so its file is hard-linked from it instead of written again; any failure to read or
+  /// link falls back to writing it.
+  std::string previous_dir;
 };
 
 /// Writes `scene`'s TSDF (and the refinement file, when named) as the committed version folder
-/// model::FusionVersionDir(versions_dir, info.version), atomically (model::WriteFusionVersion).
-/// Returns the folder. Throws std::runtime_error naming the folder.
+/// model::FusionVersionDir(versions_dir, info.version), atomically (model::WriteFusionVersion),
+/// reusing info.previous_dir's unchanged submap files. Returns the folder. Throws std::runtime_error naming the folder.
 std::string WriteSceneVersion(const std::string& versions_dir, FusionScene& scene,
                               const FusionVersionInfo& info);
 

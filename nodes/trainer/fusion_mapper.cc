@@ -177,6 +177,7 @@ void FusionMapper::Publish() {
   info.keyframes_dir = keyframes_dir_;
   info.keyframe_count = keyframes_->size();
   info.refine_source = options_.refine_net;
+  info.previous_dir = last_version_dir_;
   if (tuner_) {
     const RefineTuner::Net net = tuner_->LatestNet();
     if (!net.path.empty()) {
@@ -197,6 +198,7 @@ void FusionMapper::Publish() {
     return;  // retried after the next publish_every_frames frames (a new net's alone: in 0.2 s)
   }
   ++next_version_;
+  last_version_dir_ = dir;
   const bool new_frames = unpublished_ > 0;
   unpublished_ = 0;
   published_refine_steps_ = info.refine_steps;

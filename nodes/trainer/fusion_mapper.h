@@ -124,6 +124,7 @@ class FusionMapper {
   std::unique_ptr<RefineTuner> tuner_;  // set when refine_finetune_steps > 0
   int64_t published_refine_steps_ = 0;  // of the fine-tuned net in the newest version
   uint64_t unpublished_ = 0;
+  std::string last_version_dir_;  // the newest version written: its unchanged submaps are reused
   std::thread thread_;
 };
 

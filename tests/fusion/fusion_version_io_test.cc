@@ -151,4 +151,70 @@ TEST_CASE("fusion version: local submaps are saved and built back", "[unit]") {
   CHECK_THROWS_WITH(LoadFusionVersion(version_dir, plain), Catch::Contains("submap file"));
 }
 
+
+TEST_CASE("fusion version: unchanged submaps are linked from the previous version, changed ones written",
+          "[unit]") {
+  const std::string dir = p2i::testing::FreshDir("fusion_version_io_reuse");
+  const auto sim = scene::SimScene::BuiltIn("small_office");
+  const scene::CameraInfo cam = scene::SimScene::DefaultCamera(64, 48);
+  const auto sweep = scene::GenerateArmSweep({});
+  FusionSceneOptions options;
+  options.tsdf.voxel_size_m = 0.04;
+  options.tsdf.block_resolution = 8;
+  options.submaps.frames = 3;
+  FusionScene fused(cam, options);
+  scene::CaptureWriter keyframes(dir + "/keyframes", cam);
+  size_t added = 0;
+  auto add = [&](size_t n) {
+    for (size_t j = 0; j < n; ++j, ++added) {
+      const size_t i = added * 10;
+      scene::RgbdSample s = sim.Render(sweep[i].pose, cam, sweep[i].stamp);
+      s.id = "f" + std::to_string(i);
+      fused.AddFrame(s);
+      keyframes.Append(s);
+    }
+  };
+  auto info_for = [&](uint64_t version, const std::string& previous) {
+    FusionVersionInfo info;
+    info.version = version;
+    info.frames_integrated = added;
+    info.keyframes_dir = dir + "/keyframes";
+    info.keyframe_count = added;
+    info.previous_dir = previous;
+    return info;
+  };
+  add(7);  // submaps of 3 + 3 + 1 frames
+  const std::string v1 = WriteSceneVersion(dir + "/versions", fused, info_for(1, ""));
+  add(1);  // the third submap grows: 3 + 3 + 2
+  const std::string v2 = WriteSceneVersion(dir + "/versions", fused, info_for(2, v1));
+  const model::FusionVersionManifest m1 = model::ReadFusionVersion(v1), m2 = model::ReadFusionVersion(v2);
+  REQUIRE(m1.submap_files.size() == 3);
+  REQUIRE(m2.submap_files.size() == 3);
+  // The two finished submaps are the same files (hard links), the one that grew is new.
+  for (size_t i = 0; i < 2; ++i) {
+    CHECK(fs::equivalent(fs::path(v1) / m1.submap_files[i], fs::path(v2) / m2.submap_files[i]));
+    CHECK(fs::hard_link_count(fs::path(v2) / m2.submap_files[i]) == 2);
+  }
+  CHECK_FALSE(fs::equivalent(fs::path(v1) / m1.submap_files[2], fs::path(v2) / m2.submap_files[2]));
+  CHECK(fs::hard_link_count(fs::path(v2) / m2.submap_files[2]) == 1);
+
+  // Built back, v2 renders as a version written from scratch does.
+  const std::string fresh = WriteSceneVersion(dir + "/versions", fused, info_for(3, ""));
+  CHECK(fs::hard_link_count(fs::path(fresh) / m2.submap_files[0]) == 1);
+  const scene::Pose pose = sweep[35].pose;
+  LoadedFusionVersion a = LoadFusionVersion(v2, FusionOptions{}, 48, 48);
+  LoadedFusionVersion b = LoadFusionVersion(fresh, FusionOptions{}, 48, 48);
+  const scene::RgbdSample ra = a.synthesizer->Render(pose), rb = b.synthesizer->Render(pose);
+  CHECK(cv::norm(ra.rgb, rb.rgb, cv::NORM_INF) == 0.0);
+  CHECK(cv::norm(ra.depth, rb.depth, cv::NORM_INF) == 0.0);
+
+  // The previous version pruned (or never there): every submap is written, nothing fails.
+  fs::remove_all(v1);
+  const std::string v4 = WriteSceneVersion(dir + "/versions", fused, info_for(4, v1));
+  for (const std::string& f : model::ReadFusionVersion(v4).submap_files)
+    CHECK(fs::hard_link_count(fs::path(v4) / f) == 1);
+  // Linked files outlive the version they came from: v2 still loads after v1 is gone.
+  CHECK_NOTHROW(LoadFusionVersion(v2, FusionOptions{}, 48, 48));
+}
+
 }  // namespace p2i::fusion
