@@ -116,7 +116,7 @@ int64_t FillMissingFrom(TsdfVolume& volume, const scene::Pose& pose, const scene
   const cv::Mat only = missing(box);
   const int64_t n = FillMissingSurface(
       &roi, volume.Raycast(pose, camera.Cropped(box.x, box.y, box.width, box.height), &only));
-  if (filled) (*filled)(box).setTo(255, missing(box) & (roi.depth > 0.0f));
+  if (filled) (*filled)(box).setTo(255, only & (roi.depth > 0.0f));
   return n;
 }
 

@@ -139,9 +139,8 @@ void SurfaceMesh::Rasterize(const scene::Pose& pose, const scene::CameraInfo& ca
                                   std::to_string(only->type()) + " " + std::to_string(only->cols) + "x" +
                                   std::to_string(only->rows));
     only_bytes = only->isContinuous() ? *only : only->clone();
-    if (cv::countNonZero(only_bytes) == 0) return;
-    cv::integral(only_bytes != 0, view.only_sum, CV_32S);
-    view.only_sum /= 255;  // != 0 gives 255 per pixel
+    cv::integral((only_bytes != 0) / 255, view.only_sum, CV_32S);  // 1 per pixel to draw
+    if (view.only_sum.at<int>(h, w) == 0) return;
     view.only = only_bytes.ptr<uint8_t>(0);
   }
   const Eigen::Matrix4d cw = pose.Inverse().ToMatrix();
@@ -162,13 +161,12 @@ void SurfaceMesh::CullAndTransform(View* view) const {
   v.offset.assign(chunks_.size(), -1);
   for (size_t ci = 0; ci < chunks_.size(); ++ci) {
     const Chunk& ch = chunks_[ci];
-    if (!SphereMayBeInView(Eigen::Vector3f(v.r * ch.centre + v.t), ch.radius, v.depth_min, v.depth_max,
-                           v.fx, v.fy, v.cx, v.cy, v.w, v.h))
+    const Eigen::Vector3f centre = v.r * ch.centre + v.t;
+    if (!SphereMayBeInView(centre, ch.radius, v.depth_min, v.depth_max, v.fx, v.fy, v.cx, v.cy, v.w, v.h))
       continue;
     if (v.only != nullptr) {
       int u0, u1, v0, v1;
-      SphereScreenBox(Eigen::Vector3f(v.r * ch.centre + v.t), ch.radius, v.fx, v.fy, v.cx, v.cy, v.w,
-                      v.h, &u0, &u1, &v0, &v1);
+      SphereScreenBox(centre, ch.radius, v.fx, v.fy, v.cx, v.cy, v.w, v.h, &u0, &u1, &v0, &v1);
       if (!v.AnyToDraw(u0, u1, v0, v1)) continue;
     }
     v.offset[ci] = static_cast<int64_t>(v.verts.size());
