@@ -36,6 +36,7 @@
 #include "fusion/fusion_synthesizer.h"
 #include "fusion/tsdf_volume.h"
 #include "model/method_registry.h"
+#include "model/metrics.h"
 #include "scene/image_ops.h"
 #include "scene/sim_scene.h"
 #include "scene/trajectory.h"
@@ -91,8 +92,8 @@ bool ParseArgs(int argc, char** argv, Args* a) {
 
 /// The training frames (640x480, the first of three adjacent sweeps) and the test poses (the
 /// second sweep), as in the bench's setting (b).
-void MakeData(const Args& a, p2i::scene::RgbdDataset* train, std::vector<p2i::scene::Pose>* test) {
-  const auto sim = p2i::scene::SimScene::BuiltIn(a.scene);
+void MakeData(const Args& a, const p2i::scene::SimScene& sim, p2i::scene::RgbdDataset* train,
+              std::vector<p2i::scene::Pose>* test) {
   const auto sweeps = p2i::scene::GenerateAdjacentSweeps(p2i::scene::AdjacentSweepsOptions{});
   train->camera = p2i::scene::SimScene::DefaultCamera(640, 480);
   const auto& first = sweeps[0];
@@ -140,33 +141,61 @@ nlohmann::json BenchIntegration(const p2i::scene::RgbdDataset& train, int block_
   return j;
 }
 
-/// One row: the method built from `options` over `train` (frames at w x h), its median render
-/// time over the test poses.
-nlohmann::json BenchRender(const std::string& label, const std::string& options,
+/// The ground truth of the rows' quality columns: what the camera would deliver at each test
+/// pose, resized to w x h as the camera node resizes its frames (the sim's exact render at the
+/// frames' 640x480, then centre crop + area resize). The sim's own render at w x h would not do:
+/// it samples its textures at pixel centres, unfiltered, which no camera does.
+std::vector<p2i::scene::RgbdSample> GroundTruth(const p2i::scene::SimScene& sim,
+                                                const p2i::scene::CameraInfo& frame_camera,
+                                                const std::vector<p2i::scene::Pose>& test, int w, int h) {
+  std::vector<p2i::scene::RgbdSample> gt;
+  for (const auto& pose : test)
+    gt.push_back(p2i::scene::CenterCropResizeSample(sim.Render(pose, frame_camera, 0.0), w, h));
+  return gt;
+}
+
+/// One row: the method built from `options` over `train`, its median render time over the test
+/// poses and its mean PSNR / SSIM against `gt`. The frames are resized to the view's w x h first,
+/// as `p2i bench` does, or (`live`) kept at the camera's 640x480, as the trainer's fusion mapper
+/// keeps its keyframes, with the views rendered at w x h from them.
+nlohmann::json BenchRender(const std::string& label, const std::string& options, bool live,
                            const p2i::scene::RgbdDataset& train, const std::vector<p2i::scene::Pose>& test,
-                           int w, int h, int repeat) {
-  auto frames = std::make_shared<p2i::scene::RgbdDataset>(p2i::scene::CenterCropResizeDataset(train, w, h));
-  p2i::model::MethodInputs in;
-  in.training = frames;
+                           const std::vector<p2i::scene::RgbdSample>& gt, int w, int h, int repeat) {
   const auto t0 = Clock::now();
-  auto synth = p2i::model::GetMethod("fusion").configure(YAML::Load(options), "fusion_bench")(in);
+  std::unique_ptr<p2i::model::ViewSynthesizer> synth;
+  if (live) {
+    synth = std::make_unique<p2i::fusion::FusionSynthesizer>(
+        train, p2i::fusion::FusionOptions::FromYaml(YAML::Load(options), "fusion_bench"),
+        p2i::scene::CenterCropResizeCamera(train.camera, w, h));
+  } else {
+    p2i::model::MethodInputs in;
+    in.training = std::make_shared<p2i::scene::RgbdDataset>(p2i::scene::CenterCropResizeDataset(train, w, h));
+    synth = p2i::model::GetMethod("fusion").configure(YAML::Load(options), "fusion_bench")(in);
+  }
   const double build_ms = Ms(t0, Clock::now());
   synth->Render(test.front());  // warm-up (first allocations, LibTorch's first call)
   std::vector<double> ms;
-  double observed = 0.0;
+  double observed = 0.0, psnr = 0.0, ssim = 0.0;
   for (int r = 0; r < repeat; ++r)
-    for (const auto& pose : test) {
+    for (size_t i = 0; i < test.size(); ++i) {
       const auto a = Clock::now();
-      synth->Render(pose);
+      const p2i::scene::RgbdSample view = synth->Render(test[i]);
       ms.push_back(Ms(a, Clock::now()));
       const auto g = synth->LastGeometry();
       if (!g.empty()) observed += g.front().observed_fraction / repeat;
+      if (r == 0) {
+        psnr += p2i::model::Psnr(view.rgb, gt[i].rgb) / test.size();
+        ssim += p2i::model::Ssim(view.rgb, gt[i].rgb) / test.size();
+      }
     }
   const double p50 = Median(ms);
   const double p99 = p2i::util::PercentileNearestRank(ms, 99.0);
-  std::printf("%-22s %4dx%-4d %9.1f %9.1f %9.1f %10.0f %9.3f\n", label.c_str(), w, h, p50, p99,
-              p50 > 0 ? 1000.0 / p50 : 0.0, build_ms, observed / test.size());
+  std::printf("%-26s %4dx%-4d %9.1f %9.1f %9.1f %10.0f %9.3f %7.2f %6.3f\n", label.c_str(), w, h, p50, p99,
+              p50 > 0 ? 1000.0 / p50 : 0.0, build_ms, observed / test.size(), psnr, ssim);
   nlohmann::json j;
+  j["live"] = live;
+  j["psnr_db"] = psnr;
+  j["ssim"] = ssim;
   j["row"] = label;
   j["width"] = w;
   j["height"] = h;
@@ -237,9 +266,10 @@ int main(int argc, char** argv) {
     const char* omp = std::getenv("OMP_NUM_THREADS");
     std::printf("fusion_bench: scene %s, %d training frames, %d views, OMP_NUM_THREADS=%s\n",
                 a.scene.c_str(), a.frames, a.views, omp ? omp : "(unset: all cores)");
+    const auto sim = p2i::scene::SimScene::BuiltIn(a.scene);
     p2i::scene::RgbdDataset train;
     std::vector<p2i::scene::Pose> test;
-    MakeData(a, &train, &test);
+    MakeData(a, sim, &train, &test);
     nlohmann::json out;
     out["scene"] = a.scene;
     out["omp_num_threads"] = omp ? omp : "";
@@ -249,9 +279,10 @@ int main(int argc, char** argv) {
         out["integration"] = BenchIntegration(train, 16);  // TsdfOptions' default
         out["integration_block8"] = BenchIntegration(train, 8);
       }
-      std::printf("%-22s %9s %9s %9s %9s %10s %9s\n", "row", "size", "p50_ms", "p99_ms", "views/s",
-                  "build_ms", "observed");
-      struct Row { std::string label, options; };
+      std::printf("%-26s %9s %9s %9s %9s %10s %9s %7s %6s\n", "row", "size", "p50_ms", "p99_ms", "views/s",
+                  "build_ms", "observed", "psnr", "ssim");
+      // live_*: keyframes kept at 640x480 as the trainer's mapper keeps them (BenchRender).
+      struct Row { std::string label, options; bool live = false; };
       std::vector<Row> rows = {{"blend (mesh)", "{}"},
                                {"blend_bilinear", "{blend: {sampling: bilinear}}"},
                                {"blend_raycast", "{tsdf: {surface: raycast}}"},
@@ -260,17 +291,21 @@ int main(int argc, char** argv) {
                                {"submaps_10", "{submaps: {frames: 10}}"},
                                {"submaps_10_render1", "{submaps: {frames: 10, render: 1}}"},
                                {"submaps_20", "{submaps: {frames: 20}}"},
-                               {"submaps_20_render1", "{submaps: {frames: 20, render: 1}}"}};
+                               {"submaps_20_render1", "{submaps: {frames: 20, render: 1}}"},
+                               {"live_blend", "{}", true},
+                               {"live_blend_full_res_reads", "{blend: {keyframe_levels: 0}}", true}};
       if (!a.net.empty()) rows.push_back({"refined (zero-shot)", "{refine: {net: '" + a.net + "'}}"});
       if (!a.row.empty()) {
         const auto it = std::find_if(rows.begin(), rows.end(), [&](const Row& r) { return r.label == a.row; });
         if (it == rows.end()) throw std::runtime_error("--row " + a.row + ": no such row (see the table's first column)");
         rows = {*it};
       }
-      for (const auto& size : sizes)
+      for (const auto& size : sizes) {
+        const auto gt = GroundTruth(sim, train.camera, test, size.first, size.second);
         for (const Row& r : rows)
           out["render"].push_back(
-              BenchRender(r.label, r.options, train, test, size.first, size.second, a.repeat));
+              BenchRender(r.label, r.options, r.live, train, test, gt, size.first, size.second, a.repeat));
+      }
     }
     if (a.row.empty()) {
       std::printf("stages (median ms per view, cumulative):\n");

@@ -13,6 +13,7 @@
 #include <Eigen/Geometry>
 
 #include "fusion/fast_angle.h"
+#include "fusion/keyframe_pyramid.h"
 #include "fusion/keyframe_sampling.h"
 #include "model/coverage.h"
 #include "scene/strict_yaml_reader.h"
@@ -25,6 +26,7 @@ constexpr double kRadToDeg = 57.29577951308232;
 struct Slot {
   int index = -1;
   const scene::RgbdSample* frame = nullptr;
+  const cv::Mat* colour = nullptr;  // the pyramid level the view reads (the frame's rgb at 0)
   Eigen::Matrix3f r_kw;  // world -> keyframe camera
   Eigen::Vector3f t_kw;
   Eigen::Vector3f centre;  // keyframe camera centre in the world
@@ -52,10 +54,13 @@ ViewCandidates EmptyCandidates(const scene::Pose& pose, const scene::CameraInfo&
   return c;
 }
 
-// Keyframe slots for a view: nearest by pose, nearest first, minus an excluded one.
+// Keyframe slots for a view: nearest by pose, nearest first, minus an excluded one; each reads
+// colour at pyramid `level` (0: the keyframe itself).
 std::vector<Slot> SelectSlots(const std::vector<scene::RgbdSample>& keyframes,
+                              const std::vector<std::vector<cv::Mat>>& colour_levels,
                               const std::vector<scene::Pose>& poses, const scene::Pose& pose,
-                              int k, const CandidateRequest& request, double metres_per_degree) {
+                              int k, int level, const CandidateRequest& request,
+                              double metres_per_degree) {
   std::vector<Slot> slots;
   const size_t want = static_cast<size_t>(k) + (request.exclude_keyframe ? 1 : 0);
   for (size_t i : model::NearestPoseIndices(poses, pose, want, metres_per_degree)) {
@@ -64,6 +69,7 @@ std::vector<Slot> SelectSlots(const std::vector<scene::RgbdSample>& keyframes,
     Slot s;
     s.index = static_cast<int>(i);
     s.frame = &keyframes[i];
+    s.colour = level == 0 ? &keyframes[i].rgb : &colour_levels[i][static_cast<size_t>(level - 1)];
     const Eigen::Matrix4d kw = keyframes[i].pose.Inverse().ToMatrix();
     s.r_kw = kw.block<3, 3>(0, 0).cast<float>();
     s.t_kw = kw.block<3, 1>(0, 3).cast<float>();
@@ -98,8 +104,8 @@ class KeyframeBlender {
  public:
   KeyframeBlender(const scene::Pose& pose, const scene::CameraInfo& camera,
                   const scene::CameraInfo& frame_camera, const BlendOptions& bo,
-                  const std::vector<Slot>& slots)
-      : slots_(slots) {
+                  const std::vector<Slot>& slots, int level)
+      : slots_(slots), level_(level) {
     const Eigen::Matrix4d wc = pose.ToMatrix();
     r_wc_ = wc.block<3, 3>(0, 0).cast<float>();
     centre_ = wc.block<3, 1>(0, 3).cast<float>();
@@ -157,7 +163,9 @@ class KeyframeBlender {
       pen_[j] = a + res_w_ * res;
       ang_[j] = a;
       graze_[j] = std::max(floor_g_, nw.dot(to_k) / dist_k);
-      col_[j] = bicubic_ ? SampleBicubic(s.frame->rgb, pu, pv) : SampleBilinear(s.frame->rgb, pu, pv);
+      float cu = pu, cv = pv;
+      ToPyramidLevel(level_, s.colour->cols, s.colour->rows, &cu, &cv);
+      col_[j] = bicubic_ ? SampleBicubic(*s.colour, cu, cv) : SampleBilinear(*s.colour, cu, cv);
       vis_[j] = true;
       *p_max = std::max(*p_max, pen_[j]);
       ++n_vis;
@@ -195,6 +203,7 @@ class KeyframeBlender {
   }
 
   const std::vector<Slot>& slots_;
+  int level_;  // the keyframes' colour pyramid level read (Slot::colour)
   Eigen::Matrix3f r_wc_;
   Eigen::Vector3f centre_;
   float fx_, fy_, cx_, cy_, kfx_, kfy_, kcx_, kcy_;
@@ -213,7 +222,7 @@ BlendOptions BlendOptions::FromYaml(const YAML::Node& node, const std::string& s
   r.CheckKeys(node,
               {"k", "metres_per_degree", "visibility_abs_m", "visibility_rel", "resolution_weight",
                "penalty_epsilon", "grazing_floor", "angle_sigma_deg", "keyframe_min_distance",
-               "sampling"},
+               "sampling", "keyframe_levels"},
               "blend options");
   BlendOptions o;
   if (node["k"]) o.k = r.Int(node["k"], "k");
@@ -226,6 +235,7 @@ BlendOptions BlendOptions::FromYaml(const YAML::Node& node, const std::string& s
   r.OptionalDouble(node, "angle_sigma_deg", "blend", &o.angle_sigma_deg);
   r.OptionalDouble(node, "keyframe_min_distance", "blend", &o.keyframe_min_distance);
   if (node["sampling"]) o.sampling = r.String(node["sampling"], "sampling");
+  if (node["keyframe_levels"]) o.keyframe_levels = r.Int(node["keyframe_levels"], "keyframe_levels");
   try {
     o.Validate();
   } catch (const std::invalid_argument& e) {
@@ -246,6 +256,8 @@ void BlendOptions::Validate() const {
   if (!(angle_sigma_deg > 0.0) || !std::isfinite(angle_sigma_deg)) fail("angle_sigma_deg must be > 0");
   if (!(keyframe_min_distance >= 0.0) || !std::isfinite(keyframe_min_distance))
     fail("keyframe_min_distance must be >= 0");
+  if (keyframe_levels < 0 || keyframe_levels > 6)
+    fail("keyframe_levels must be in [0, 6], got " + std::to_string(keyframe_levels));
   if (sampling != "bicubic" && sampling != "bilinear")
     fail("sampling must be bicubic or bilinear, got '" + sampling + "'");
 }
@@ -323,6 +335,7 @@ bool FusionScene::AddFrame(const scene::RgbdSample& frame, bool integrate) {
   kf.id = frame.id;
   kf.rgb = frame.rgb.clone();
   kf.depth = frame.depth.clone();
+  colour_levels_.push_back(ColourPyramid(kf.rgb, options_.blend.keyframe_levels));
   keyframes_.push_back(std::move(kf));
   poses_.push_back(frame.pose);
   keyframe_submap_.push_back(submaps_ ? submaps_->current() : -1);
@@ -342,13 +355,16 @@ TsdfRaycast FusionScene::Surface(const std::vector<int>& slot_keyframes, const s
 ViewCandidates FusionScene::RenderCandidates(const scene::Pose& pose, const scene::CameraInfo& camera,
                                              const CandidateRequest& request) {
   const int k = options_.blend.k;
-  const std::vector<Slot> slots = SelectSlots(keyframes_, poses_, pose, k, request,
+  const int built = colour_levels_.empty() ? 0 : static_cast<int>(colour_levels_.front().size());
+  const int level = PyramidLevelFor(camera.fx(), camera.fy(), frame_camera_.fx(), frame_camera_.fy(),
+                                    std::min(built, options_.blend.keyframe_levels));
+  const std::vector<Slot> slots = SelectSlots(keyframes_, colour_levels_, poses_, pose, k, level, request,
                                               options_.blend.metres_per_degree);
   std::vector<int> slot_keyframes;
   for (const Slot& s : slots) slot_keyframes.push_back(s.index);
   ViewCandidates c = EmptyCandidates(pose, camera, Surface(slot_keyframes, pose, camera), k);
   RecordSlots(slots, k, &c);
-  KeyframeBlender blender(pose, camera, frame_camera_, options_.blend, slots);
+  KeyframeBlender blender(pose, camera, frame_camera_, options_.blend, slots, level);
   BlendStats stats;
   for (int v = 0; v < camera.image_height; ++v) {
     const float* drow = c.depth.ptr<float>(v);

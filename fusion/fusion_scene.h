@@ -48,6 +48,11 @@ struct BlendOptions {
   /// How a keyframe's colour is read at a surface point's projection (keyframe_sampling.h):
   /// "bicubic" (Catmull-Rom; sharper) or "bilinear" (the default before 2026-12-03).
   std::string sampling = "bicubic";
+  /// Pre-filtered half, quarter, ... copies of each keyframe's colour kept for views rendered
+  /// below the camera's resolution (keyframe_pyramid.h): a view reads the level nearest at or
+  /// above its own focal length, at most this many halvings down (0 = always read the keyframe
+  /// itself, unfiltered). A view at the camera's resolution reads the keyframe either way.
+  int keyframe_levels = 3;
   static BlendOptions FromYaml(const YAML::Node& node, const std::string& source);
   void Validate() const;
 };
@@ -122,6 +127,8 @@ class FusionScene {
   std::optional<SubmapSet> submaps_;
   std::vector<int> keyframe_submap_;
   std::vector<scene::RgbdSample> keyframes_;
+  /// Levels 1.. of each keyframe's colour pyramid (BlendOptions::keyframe_levels).
+  std::vector<std::vector<cv::Mat>> colour_levels_;
   std::vector<scene::Pose> poses_;
 };
 
