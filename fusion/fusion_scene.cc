@@ -157,8 +157,9 @@ class KeyframeBlender {
       if (!(dk > 0.0f) || std::fabs(dk - xk.z()) > std::max(vis_abs_, vis_rel_ * xk.z())) continue;
       const Eigen::Vector3f to_k = s.centre - xw;  // point -> keyframe camera
       const float dist_k = to_k.norm();
-      const Eigen::Vector3f dir_k = -to_k / dist_k;  // keyframe camera -> point
-      const float a = AngleFromSinCos(dir.cross(dir_k).norm(), dir.dot(dir_k));
+      // The angle between the view's ray and the keyframe's (camera -> point, i.e. -to_k);
+      // AngleFromSinCos takes unnormalised sides, so to_k needs no division.
+      const float a = AngleFromSinCos(dir.cross(to_k).norm(), -dir.dot(to_k));
       const float res = std::max(0.0f, (dist_k - dist0) / dist0);
       pen_[j] = a + res_w_ * res;
       ang_[j] = a;
