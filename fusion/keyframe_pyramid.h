@@ -1,5 +1,5 @@
 /// @file keyframe_pyramid.h
-/// @brief Pre-filtered, smaller copies of a keyframe's colour (a Gaussian pyramid) and the level a
+/// @brief Pre-filtered, smaller copies of a keyframe's colour (a pyramid of 2x2 means) and the level a
 /// view reads from. A view rendered at a fraction of the camera's resolution (e.g. 128x128 or
 /// 320x240 from a 640x480 camera) that read the full-resolution keyframes would sample them
 /// several pixels apart without a low-pass first: aliasing (texture detail turning into noise
