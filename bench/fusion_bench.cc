@@ -142,15 +142,13 @@ nlohmann::json BenchIntegration(const p2i::scene::RgbdDataset& train, int block_
 }
 
 /// The ground truth of the rows' quality columns: what the camera would deliver at each test
-/// pose, resized to w x h as the camera node resizes its frames (the sim's exact render at the
-/// frames' 640x480, then centre crop + area resize). The sim's own render at w x h would not do:
-/// it samples its textures at pixel centres, unfiltered, which no camera does.
-std::vector<p2i::scene::RgbdSample> GroundTruth(const p2i::scene::SimScene& sim,
-                                                const p2i::scene::CameraInfo& frame_camera,
-                                                const std::vector<p2i::scene::Pose>& test, int w, int h) {
+/// pose (`frames`: the sim's exact render at the frames' 640x480), resized to w x h as the camera
+/// node resizes its frames (centre crop + area resize). The sim's own render at w x h would not
+/// do: it samples its textures at pixel centres, unfiltered, which no camera does.
+std::vector<p2i::scene::RgbdSample> GroundTruth(const std::vector<p2i::scene::RgbdSample>& frames, int w,
+                                                int h) {
   std::vector<p2i::scene::RgbdSample> gt;
-  for (const auto& pose : test)
-    gt.push_back(p2i::scene::CenterCropResizeSample(sim.Render(pose, frame_camera, 0.0), w, h));
+  for (const auto& f : frames) gt.push_back(p2i::scene::CenterCropResizeSample(f, w, h));
   return gt;
 }
 
@@ -300,8 +298,10 @@ int main(int argc, char** argv) {
         if (it == rows.end()) throw std::runtime_error("--row " + a.row + ": no such row (see the table's first column)");
         rows = {*it};
       }
+      std::vector<p2i::scene::RgbdSample> test_frames;  // at the camera's 640x480, once
+      for (const auto& pose : test) test_frames.push_back(sim.Render(pose, train.camera, 0.0));
       for (const auto& size : sizes) {
-        const auto gt = GroundTruth(sim, train.camera, test, size.first, size.second);
+        const auto gt = GroundTruth(test_frames, size.first, size.second);
         for (const Row& r : rows)
           out["render"].push_back(
               BenchRender(r.label, r.options, r.live, train, test, gt, size.first, size.second, a.repeat));

@@ -110,13 +110,7 @@ int64_t FillMissingFrom(TsdfVolume& volume, const scene::Pose& pose, const scene
                         TsdfRaycast* into, cv::Mat* filled) {
   const cv::Mat missing = into->depth <= 0.0f;
   if (filled) *filled = cv::Mat::zeros(into->depth.size(), CV_8UC1);
-  const int64_t n_missing = cv::countNonZero(missing);
-  if (n_missing == 0) return 0;
-  if (n_missing == static_cast<int64_t>(missing.total())) {  // nothing drawn yet: no mask, no copy
-    *into = volume.Raycast(pose, camera);
-    if (filled) *filled = into->depth > 0.0f;
-    return cv::countNonZero(into->depth > 0.0f);
-  }
+  if (cv::countNonZero(missing) == 0) return 0;
   const cv::Rect box = cv::boundingRect(missing);
   TsdfRaycast roi{into->depth(box), into->normals(box), into->colour(box)};  // views into `into`
   const cv::Mat only = missing(box);
