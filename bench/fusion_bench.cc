@@ -291,7 +291,8 @@ int main(int argc, char** argv) {
                                {"submaps_20", "{submaps: {frames: 20}}"},
                                {"submaps_20_render1", "{submaps: {frames: 20, render: 1}}"},
                                {"live_blend", "{}", true},
-                               {"live_blend_full_res_reads", "{blend: {keyframe_levels: 0}}", true}};
+                               {"live_blend_full_res_reads", "{blend: {keyframe_levels: 0}}", true},
+                               {"live_blend_bicubic", "{blend: {sampling: bicubic}}", true}};
       if (!a.net.empty()) rows.push_back({"refined (zero-shot)", "{refine: {net: '" + a.net + "'}}"});
       if (!a.row.empty()) {
         const auto it = std::find_if(rows.begin(), rows.end(), [&](const Row& r) { return r.label == a.row; });

@@ -27,6 +27,7 @@ struct Slot {
   int index = -1;
   const scene::RgbdSample* frame = nullptr;
   const cv::Mat* colour = nullptr;  // the pyramid level the view reads (the frame's rgb at 0)
+  const cv::Mat* depth = nullptr;   // the same level of the depth pyramid (the frame's depth at 0)
   Eigen::Matrix3f r_kw;  // world -> keyframe camera
   Eigen::Vector3f t_kw;
   Eigen::Vector3f centre;  // keyframe camera centre in the world
@@ -58,6 +59,7 @@ ViewCandidates EmptyCandidates(const scene::Pose& pose, const scene::CameraInfo&
 // colour at pyramid `level` (0: the keyframe itself).
 std::vector<Slot> SelectSlots(const std::vector<scene::RgbdSample>& keyframes,
                               const std::vector<std::vector<cv::Mat>>& colour_levels,
+                              const std::vector<std::vector<cv::Mat>>& depth_levels,
                               const std::vector<scene::Pose>& poses, const scene::Pose& pose,
                               int k, int level, const CandidateRequest& request,
                               double metres_per_degree) {
@@ -70,6 +72,7 @@ std::vector<Slot> SelectSlots(const std::vector<scene::RgbdSample>& keyframes,
     s.index = static_cast<int>(i);
     s.frame = &keyframes[i];
     s.colour = level == 0 ? &keyframes[i].rgb : &colour_levels[i][static_cast<size_t>(level - 1)];
+    s.depth = level == 0 ? &keyframes[i].depth : &depth_levels[i][static_cast<size_t>(level - 1)];
     const Eigen::Matrix4d kw = keyframes[i].pose.Inverse().ToMatrix();
     s.r_kw = kw.block<3, 3>(0, 0).cast<float>();
     s.t_kw = kw.block<3, 1>(0, 3).cast<float>();
@@ -106,6 +109,9 @@ class KeyframeBlender {
                   const scene::CameraInfo& frame_camera, const BlendOptions& bo,
                   const std::vector<Slot>& slots, int level)
       : slots_(slots), level_(level) {
+    bicubic_ = bo.sampling == "bicubic" ||
+               (bo.sampling == "auto" &&
+                UseBicubicRead(camera.fx(), camera.fy(), frame_camera.fx(), frame_camera.fy(), level));
     const Eigen::Matrix4d wc = pose.ToMatrix();
     r_wc_ = wc.block<3, 3>(0, 0).cast<float>();
     centre_ = wc.block<3, 1>(0, 3).cast<float>();
@@ -117,7 +123,6 @@ class KeyframeBlender {
     vis_abs_ = static_cast<float>(bo.visibility_abs_m), vis_rel_ = static_cast<float>(bo.visibility_rel);
     res_w_ = static_cast<float>(bo.resolution_weight), eps_ = static_cast<float>(bo.penalty_epsilon);
     floor_g_ = static_cast<float>(bo.grazing_floor);
-    bicubic_ = bo.sampling == "bicubic";
     sigma_ = static_cast<float>(bo.angle_sigma_deg / kRadToDeg);
   }
 
@@ -153,7 +158,9 @@ class KeyframeBlender {
       if (!(xk.z() > 1e-4f)) continue;
       const float pu = kfx_ * xk.x() / xk.z() + kcx_, pv = kfy_ * xk.y() / xk.z() + kcy_;
       if (!(pu >= 0.0f && pv >= 0.0f && pu <= kw_ - 1.0f && pv <= kh_ - 1.0f)) continue;
-      const float dk = s.frame->depth.at<float>(static_cast<int>(pv + 0.5f), static_cast<int>(pu + 0.5f));
+      float du = pu, dv = pv;
+      ToPyramidLevel(level_, s.depth->cols, s.depth->rows, &du, &dv);
+      const float dk = s.depth->at<float>(static_cast<int>(dv + 0.5f), static_cast<int>(du + 0.5f));
       if (!(dk > 0.0f) || std::fabs(dk - xk.z()) > std::max(vis_abs_, vis_rel_ * xk.z())) continue;
       const Eigen::Vector3f to_k = s.centre - xw;  // point -> keyframe camera
       const float dist_k = to_k.norm();
@@ -259,8 +266,8 @@ void BlendOptions::Validate() const {
     fail("keyframe_min_distance must be >= 0");
   if (keyframe_levels < 0 || keyframe_levels > 6)
     fail("keyframe_levels must be in [0, 6], got " + std::to_string(keyframe_levels));
-  if (sampling != "bicubic" && sampling != "bilinear")
-    fail("sampling must be bicubic or bilinear, got '" + sampling + "'");
+  if (sampling != "auto" && sampling != "bicubic" && sampling != "bilinear")
+    fail("sampling must be auto, bicubic or bilinear, got '" + sampling + "'");
 }
 
 FusionSceneOptions FusionSceneOptions::FromYaml(const YAML::Node& node, const std::string& source) {
@@ -337,6 +344,7 @@ bool FusionScene::AddFrame(const scene::RgbdSample& frame, bool integrate) {
   kf.rgb = frame.rgb.clone();
   kf.depth = frame.depth.clone();
   colour_levels_.push_back(ColourPyramid(kf.rgb, options_.blend.keyframe_levels));
+  depth_levels_.push_back(DepthPyramid(kf.depth, options_.blend.keyframe_levels));
   keyframes_.push_back(std::move(kf));
   poses_.push_back(frame.pose);
   keyframe_submap_.push_back(submaps_ ? submaps_->current() : -1);
@@ -359,7 +367,7 @@ ViewCandidates FusionScene::RenderCandidates(const scene::Pose& pose, const scen
   const int built = colour_levels_.empty() ? 0 : static_cast<int>(colour_levels_.front().size());
   const int level = PyramidLevelFor(camera.fx(), camera.fy(), frame_camera_.fx(), frame_camera_.fy(),
                                     std::min(built, options_.blend.keyframe_levels));
-  const std::vector<Slot> slots = SelectSlots(keyframes_, colour_levels_, poses_, pose, k, level, request,
+  const std::vector<Slot> slots = SelectSlots(keyframes_, colour_levels_, depth_levels_, poses_, pose, k, level, request,
                                               options_.blend.metres_per_degree);
   std::vector<int> slot_keyframes;
   for (const Slot& s : slots) slot_keyframes.push_back(s.index);

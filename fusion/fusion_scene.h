@@ -46,8 +46,10 @@ struct BlendOptions {
   /// from every keyframe (0 = every frame is a keyframe; the TSDF always gets every frame).
   double keyframe_min_distance = 0.0;
   /// How a keyframe's colour is read at a surface point's projection (keyframe_sampling.h):
-  /// "bicubic" (Catmull-Rom; sharper) or "bilinear" (the default before 2026-12-03).
-  std::string sampling = "bicubic";
+  /// "bicubic" (Catmull-Rom; sharper), "bilinear", or "auto" (the default since 2026-12-04):
+  /// bicubic where the view reads its pyramid level at about one level pixel per view pixel,
+  /// bilinear where it skips pixels of the level (UseBicubicRead, keyframe_pyramid.h).
+  std::string sampling = "auto";
   /// Pre-filtered half, quarter, ... copies of each keyframe's colour kept for views rendered
   /// below the camera's resolution (keyframe_pyramid.h): a view reads the level nearest at or
   /// above its own focal length, at most this many halvings down (0 = always read the keyframe
@@ -129,6 +131,8 @@ class FusionScene {
   std::vector<scene::RgbdSample> keyframes_;
   /// Levels 1.. of each keyframe's colour pyramid (BlendOptions::keyframe_levels).
   std::vector<std::vector<cv::Mat>> colour_levels_;
+  /// Levels 1.. of each keyframe's depth pyramid (DepthPyramid), read by the visibility test.
+  std::vector<std::vector<cv::Mat>> depth_levels_;
   std::vector<scene::Pose> poses_;
 };
 

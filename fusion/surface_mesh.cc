@@ -130,7 +130,12 @@ void SurfaceMesh::Rasterize(const scene::Pose& pose, const scene::CameraInfo& ca
   out->normals = cv::Mat::zeros(h, w, CV_32FC3);
   out->colour = cv::Mat::zeros(h, w, CV_32FC3);
   if (w <= 0 || h <= 0) return;
-  View view;
+  // One View per thread, kept between calls: its buffers (the visible chunks' vertices, the
+  // z-buffer) keep their capacity, so a view neither reallocates them nor faults in fresh pages.
+  thread_local View view;
+  view.visible.clear();
+  view.verts.clear();
+  view.only = nullptr;
   cv::Mat only_bytes;
   if (only != nullptr) {
     if (only->type() != CV_8UC1 || only->cols != w || only->rows != h)

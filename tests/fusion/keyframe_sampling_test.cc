@@ -63,11 +63,11 @@ TEST_CASE("keyframe sampling: the bicubic keeps more of a one-pixel line, clampe
 }
 
 TEST_CASE("BlendOptions: sampling is read, checked, and changes the blend", "[unit]") {
-  CHECK(BlendOptions().sampling == "bicubic");
+  CHECK(BlendOptions().sampling == "auto");
   CHECK(BlendOptions::FromYaml(YAML::Load("{sampling: bilinear}"), "test.yaml").sampling ==
         "bilinear");
   CHECK_THROWS_WITH(BlendOptions::FromYaml(YAML::Load("{sampling: nearest}"), "test.yaml"),
-                    Catch::Contains("sampling must be bicubic or bilinear, got 'nearest'") &&
+                    Catch::Contains("sampling must be auto, bicubic or bilinear, got 'nearest'") &&
                         Catch::Contains("test.yaml"));
   // A view between the keyframes reads them at fractional positions: the two kernels differ
   // there, by little on this smooth texture.
