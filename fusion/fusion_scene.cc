@@ -158,9 +158,10 @@ class KeyframeBlender {
       if (!(xk.z() > 1e-4f)) continue;
       const float pu = kfx_ * xk.x() / xk.z() + kcx_, pv = kfy_ * xk.y() / xk.z() + kcy_;
       if (!(pu >= 0.0f && pv >= 0.0f && pu <= kw_ - 1.0f && pv <= kh_ - 1.0f)) continue;
-      float du = pu, dv = pv;
-      ToPyramidLevel(level_, s.depth->cols, s.depth->rows, &du, &dv);
-      const float dk = s.depth->at<float>(static_cast<int>(dv + 0.5f), static_cast<int>(du + 0.5f));
+      // The projection at the level read; the depth and colour levels have the same size.
+      float lu = pu, lv = pv;
+      ToPyramidLevel(level_, s.depth->cols, s.depth->rows, &lu, &lv);
+      const float dk = s.depth->at<float>(static_cast<int>(lv + 0.5f), static_cast<int>(lu + 0.5f));
       if (!(dk > 0.0f) || std::fabs(dk - xk.z()) > std::max(vis_abs_, vis_rel_ * xk.z())) continue;
       const Eigen::Vector3f to_k = s.centre - xw;  // point -> keyframe camera
       const float dist_k = to_k.norm();
@@ -171,9 +172,7 @@ class KeyframeBlender {
       pen_[j] = a + res_w_ * res;
       ang_[j] = a;
       graze_[j] = std::max(floor_g_, nw.dot(to_k) / dist_k);
-      float cu = pu, cv = pv;
-      ToPyramidLevel(level_, s.colour->cols, s.colour->rows, &cu, &cv);
-      col_[j] = bicubic_ ? SampleBicubic(*s.colour, cu, cv) : SampleBilinear(*s.colour, cu, cv);
+      col_[j] = bicubic_ ? SampleBicubic(*s.colour, lu, lv) : SampleBilinear(*s.colour, lu, lv);
       vis_[j] = true;
       *p_max = std::max(*p_max, pen_[j]);
       ++n_vis;
