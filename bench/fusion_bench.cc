@@ -13,8 +13,9 @@
 ///
 /// Usage: OMP_NUM_THREADS=1 fusion_bench [--scene small_office] [--frames 40] [--views 30]
 ///                                       [--net models/refine_sim.pt] [--json fusion_bench.json]
-///                                       [--stages-only] [--row LABEL [--repeat N]]
-/// (--row: one render row at both sizes, nothing else, each test pose rendered N times: for a
+///                                       [--stages-only] [--row LABEL [--repeat N]] [--size WxH]
+/// (--size: rows and stages at this size only; --row: one render row, nothing else, each
+/// test pose rendered N times: for a
 /// profiler, e.g. `perf record build/bin/fusion_bench --row submaps_20 --repeat 20`)
 /// OMP_NUM_THREADS=1 makes Open3D's kernels and LibTorch use one thread (both read it at start).
 #include <algorithm>
@@ -61,6 +62,7 @@ struct Args {
   bool stages_only = false;  ///< only the stage breakdown (for a profiler)
   std::string row;           ///< only this render row (both sizes), no integration or stages
   int repeat = 1;            ///< renders of each test pose per row (a profiler wants many)
+  int width = 0, height = 0; ///< --size WxH: render rows at this size only (0: 128x128 and 320x240)
 };
 
 bool ParseArgs(int argc, char** argv, Args* a) {
@@ -81,6 +83,11 @@ bool ParseArgs(int argc, char** argv, Args* a) {
       a->row = argv[++i];
     } else if (k == "--repeat" && has) {
       a->repeat = std::max(1, std::atoi(argv[++i]));
+    } else if (k == "--size" && has) {
+      if (std::sscanf(argv[++i], "%dx%d", &a->width, &a->height) != 2 || a->width < 8 || a->height < 8) {
+        std::cerr << "fusion_bench: --size " << argv[i] << ": expected WxH, e.g. 128x128 (each >= 8)\n";
+        return false;
+      }
     } else if (k == "--stages-only") {
       a->stages_only = true;
     } else {
@@ -208,32 +215,39 @@ nlohmann::json BenchRender(const std::string& label, const std::string& options,
 
 /// Where a view's time goes, at w x h on a FusionScene of the same frames (default options):
 /// Open3D's raycast alone, + the trilinear hit refinement, + the crack fill (the default raycast),
-/// then the raycast + keyframe blend (RenderCandidates). The full Render row adds the conversion
-/// to an 8-bit view and the hole fill (or the learned refinement).
+/// then the raycast + keyframe blend (RenderCandidates), the mesh's z-buffer and the mesh + blend,
+/// and the last two again over keyframes kept at 640x480 (`live`, as the trainer's mapper keeps
+/// them). The full Render row adds the conversion to an 8-bit view and the hole fill (or the
+/// learned refinement).
 nlohmann::json BenchStages(const p2i::scene::RgbdDataset& train, const std::vector<p2i::scene::Pose>& test,
                            int w, int h) {
   const p2i::scene::RgbdDataset frames = p2i::scene::CenterCropResizeDataset(train, w, h);
-  struct Stage { std::string label; bool refine; int cracks; bool blend; std::string surface; };
+  const p2i::scene::CameraInfo view_camera = frames.camera;
+  struct Stage { std::string label; bool refine; int cracks; bool blend; std::string surface; bool live = false; };
   const std::vector<Stage> stages = {{"open3d raycast", false, 0, false, "raycast"},
                                      {"+ hit refinement", true, 0, false, "raycast"},
                                      {"+ crack fill", true, 2, false, "raycast"},
                                      {"+ keyframe blend", true, 2, true, "raycast"},
                                      {"mesh raster", true, 2, false, "mesh"},
-                                     {"mesh + keyframe blend", true, 2, true, "mesh"}};
+                                     {"mesh + keyframe blend", true, 2, true, "mesh"},
+                                     {"live mesh raster", true, 2, false, "mesh", true},
+                                     {"live mesh + keyframe blend", true, 2, true, "mesh", true}};
   nlohmann::json out = nlohmann::json::object();
   for (const Stage& st : stages) {
     p2i::fusion::FusionSceneOptions o;
     o.tsdf.refine_hits = st.refine;
     o.tsdf.crack_fill_passes = st.cracks;
     o.tsdf.surface = st.surface;
-    p2i::fusion::FusionScene scene(frames.camera, o);
-    for (const auto& f : frames.frames) scene.AddFrame(f);
+    // live: keyframes kept at the camera's 640x480, as the trainer's mapper keeps them.
+    const p2i::scene::RgbdDataset& fused = st.live ? train : frames;
+    p2i::fusion::FusionScene scene(fused.camera, o);
+    for (const auto& f : fused.frames) scene.AddFrame(f);
     const auto p0 = Clock::now();
     scene.tsdf().Prepare();  // the mesh of surface "mesh" (once per change of the volume)
     const double prepare_ms = Ms(p0, Clock::now());
     auto once = [&](const p2i::scene::Pose& pose) {
-      if (st.blend) scene.RenderCandidates(pose, frames.camera);
-      else scene.tsdf().Raycast(pose, frames.camera);
+      if (st.blend) scene.RenderCandidates(pose, view_camera);
+      else scene.tsdf().Raycast(pose, view_camera);
     };
     once(test.front());
     std::vector<double> ms;
@@ -257,7 +271,7 @@ int main(int argc, char** argv) {
   Args a;
   if (!ParseArgs(argc, argv, &a)) {
     std::cerr << "usage: OMP_NUM_THREADS=1 fusion_bench [--scene NAME] [--frames N] [--views N] "
-                 "[--net FILE] [--json FILE] [--stages-only] [--row LABEL [--repeat N]]\n";
+                 "[--net FILE] [--json FILE] [--stages-only] [--row LABEL [--repeat N]] [--size WxH]\n";
     return 2;
   }
   try {
@@ -271,7 +285,8 @@ int main(int argc, char** argv) {
     nlohmann::json out;
     out["scene"] = a.scene;
     out["omp_num_threads"] = omp ? omp : "";
-    const std::vector<std::pair<int, int>> sizes = {{128, 128}, {320, 240}};
+    std::vector<std::pair<int, int>> sizes = {{128, 128}, {320, 240}};
+    if (a.width > 0) sizes = {{a.width, a.height}};
     if (!a.stages_only) {
       if (a.row.empty()) {
         out["integration"] = BenchIntegration(train, 16);  // TsdfOptions' default
