@@ -35,7 +35,7 @@ struct Slot {
 
 // The raycast of the view and zeroed planes for k keyframe slots.
 ViewCandidates EmptyCandidates(const scene::Pose& pose, const scene::CameraInfo& camera,
-                               const TsdfRaycast& ray, int k) {
+                               const TsdfRaycast& ray, int k, bool slot_planes) {
   const int w = camera.image_width, h = camera.image_height;
   ViewCandidates c;
   c.pose = pose;
@@ -48,6 +48,7 @@ ViewCandidates EmptyCandidates(const scene::Pose& pose, const scene::CameraInfo&
   c.blended = cv::Mat::zeros(h, w, CV_32FC3);
   c.colours.assign(static_cast<size_t>(k), cv::Mat());
   c.weights.assign(static_cast<size_t>(k), cv::Mat());
+  if (!slot_planes) return c;
   for (int j = 0; j < k; ++j) {
     c.colours[j] = cv::Mat::zeros(h, w, CV_32FC3);
     c.weights[j] = cv::Mat::zeros(h, w, CV_32FC1);
@@ -107,8 +108,8 @@ class KeyframeBlender {
  public:
   KeyframeBlender(const scene::Pose& pose, const scene::CameraInfo& camera,
                   const scene::CameraInfo& frame_camera, const BlendOptions& bo,
-                  const std::vector<Slot>& slots, int level)
-      : slots_(slots), level_(level) {
+                  const std::vector<Slot>& slots, int level, bool slot_planes)
+      : slots_(slots), level_(level), slot_planes_(slot_planes) {
     bicubic_ = bo.sampling == "bicubic" ||
                (bo.sampling == "auto" &&
                 UseBicubicRead(camera.fx(), camera.fy(), frame_camera.fx(), frame_camera.fy(), level));
@@ -198,8 +199,10 @@ class KeyframeBlender {
     for (size_t j = 0; j < slots_.size(); ++j) {
       if (!vis_[j]) continue;
       const float a = wgt_[j] / wsum;
-      c->weights[j].at<float>(v, u) = a;
-      c->colours[j].at<cv::Vec3f>(v, u) = col_[j];
+      if (slot_planes_) {
+        c->weights[j].at<float>(v, u) = a;
+        c->colours[j].at<cv::Vec3f>(v, u) = col_[j];
+      }
       out += a * col_[j];
     }
     c->blended.at<cv::Vec3f>(v, u) = out;
@@ -211,6 +214,7 @@ class KeyframeBlender {
 
   const std::vector<Slot>& slots_;
   int level_;  // the keyframes' colour pyramid level read (Slot::colour)
+  bool slot_planes_;  // write ViewCandidates::colours / weights (CandidateRequest::slot_planes)
   Eigen::Matrix3f r_wc_;
   Eigen::Vector3f centre_;
   float fx_, fy_, cx_, cy_, kfx_, kfy_, kcx_, kcy_;
@@ -370,9 +374,10 @@ ViewCandidates FusionScene::RenderCandidates(const scene::Pose& pose, const scen
                                               options_.blend.metres_per_degree);
   std::vector<int> slot_keyframes;
   for (const Slot& s : slots) slot_keyframes.push_back(s.index);
-  ViewCandidates c = EmptyCandidates(pose, camera, Surface(slot_keyframes, pose, camera), k);
+  ViewCandidates c =
+      EmptyCandidates(pose, camera, Surface(slot_keyframes, pose, camera), k, request.slot_planes);
   RecordSlots(slots, k, &c);
-  KeyframeBlender blender(pose, camera, frame_camera_, options_.blend, slots, level);
+  KeyframeBlender blender(pose, camera, frame_camera_, options_.blend, slots, level, request.slot_planes);
   BlendStats stats;
   for (int v = 0; v < camera.image_height; ++v) {
     const float* drow = c.depth.ptr<float>(v);

@@ -73,6 +73,10 @@ struct FusionSceneOptions {
 struct CandidateRequest {
   /// Keyframe index not to use as a colour source (its frame stays in the TSDF).
   std::optional<int> exclude_keyframe;
+  /// Fill ViewCandidates::colours and ::weights (the refinement's per-slot input). A view served
+  /// without a refinement needs only the blend: false leaves each slot's two maps empty (k of them
+  /// still), which saves allocating, zeroing and writing 16 bytes per slot and pixel.
+  bool slot_planes = true;
 };
 
 /// Frames arrive at any time (AddFrame); every render uses everything added so far.

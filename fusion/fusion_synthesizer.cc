@@ -102,7 +102,9 @@ int FillFrom(model::ViewSynthesizer& filler, const scene::Pose& pose, const scen
 
 scene::RgbdSample FusionSynthesizer::RenderAt(const scene::Pose& pose, const scene::CameraInfo& camera) {
   CheckCamera(camera, "FusionSynthesizer::RenderAt");
-  const ViewCandidates c = scene_.RenderCandidates(pose, camera);
+  CandidateRequest request;
+  request.slot_planes = refiner_ != nullptr;  // only a refinement reads the per-slot maps
+  const ViewCandidates c = scene_.RenderCandidates(pose, camera, request);
   last_coverage_ = c.coverage;
   last_filler_fraction_ = 0.0;
   scene::RgbdSample v;

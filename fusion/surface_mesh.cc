@@ -81,8 +81,7 @@ SurfaceMesh::SurfaceMesh(const std::vector<Eigen::Vector3f>& positions,
           seen_in[g] = static_cast<int32_t>(ci);
           local_index[g] = static_cast<int32_t>(static_cast<int64_t>(pos_.size()) - ch.vertex_begin);
           pos_.push_back(positions[g]);
-          nrm_.push_back(normals[g]);
-          col_.push_back(colours[g]);
+          shade_.push_back({normals[g], colours[g]});
         }
         tri_.push_back(local_index[g]);
       }
@@ -259,13 +258,14 @@ void SurfaceMesh::Resolve(const View& vw, TsdfRaycast* out) const {
       if (!(q > 0.0f)) continue;
       const float b0 = q0 / q, b1 = q1 / q, b2 = q2 / q;
       const int64_t va = ch.vertex_begin + ia, vb = ch.vertex_begin + ib, vc = ch.vertex_begin + ic;
-      Eigen::Vector3f n = vw.r * (b0 * nrm_[va] + b1 * nrm_[vb] + b2 * nrm_[vc]);
+      const Shading &sa = shade_[va], &sb = shade_[vb], &sc = shade_[vc];
+      Eigen::Vector3f n = vw.r * (b0 * sa.nrm + b1 * sb.nrm + b2 * sc.nrm);
       const float len = n.norm();
       if (!(len > 1e-6f)) continue;
       n /= len;
       const Eigen::Vector3f ray((px - vw.cx) / vw.fx, (py - vw.cy) / vw.fy, 1.0f);
       if (n.dot(ray) > 0.0f) n = -n;
-      const Eigen::Vector3f col = (b0 * col_[va] + b1 * col_[vb] + b2 * col_[vc]).cwiseMax(0.0f).cwiseMin(1.0f);
+      const Eigen::Vector3f col = (b0 * sa.col + b1 * sb.col + b2 * sc.col).cwiseMax(0.0f).cwiseMin(1.0f);
       drow[u] = vw.zbuf[i];
       nrow[u] = cv::Vec3f(n.x(), n.y(), n.z());
       crow[u] = cv::Vec3f(col.x(), col.y(), col.z());

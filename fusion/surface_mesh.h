@@ -58,11 +58,17 @@ class SurfaceMesh {
   struct Chunk {
     Eigen::Vector3f centre;
     float radius = 0.0f;           ///< bounding sphere of its vertices
-    int64_t vertex_begin = 0, vertex_end = 0;      ///< into pos_ / nrm_ / col_
+    int64_t vertex_begin = 0, vertex_end = 0;      ///< into pos_ / shade_
     int64_t triangle_begin = 0, triangle_end = 0;  ///< into tri_ (local vertex indices per chunk)
   };
   std::vector<Chunk> chunks_;
-  std::vector<Eigen::Vector3f> pos_, nrm_, col_;
+  std::vector<Eigen::Vector3f> pos_;  ///< read per vertex of a visible chunk (CullAndTransform)
+  /// Normal and colour of each vertex side by side: Resolve reads both for 3 vertices per pixel,
+  /// from one cache line each rather than two.
+  struct Shading {
+    Eigen::Vector3f nrm, col;
+  };
+  std::vector<Shading> shade_;
   std::vector<int32_t> tri_;  ///< 3 per triangle, indices relative to the chunk's vertex_begin
   int64_t triangle_count_ = 0;
   /// +1 when a counter-clockwise (right-handed) triangle's cross product points along its vertex

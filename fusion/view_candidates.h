@@ -54,12 +54,13 @@ struct ViewCandidates {
   cv::Mat observed;
 
   /// k x CV_32FC3, RGB in [0, 1]: the colour keyframe slot j sees at this pixel's surface point
-  /// (bilinear sample at its projection); (0, 0, 0) where its weight is 0.
+  /// (bilinear sample at its projection); (0, 0, 0) where its weight is 0. Each map is empty
+  /// when the view was rendered with CandidateRequest::slot_planes false (fusion_scene.h).
   std::vector<cv::Mat> colours;
   /// k x CV_32FC1 in [0, 1]: normalised view-dependent blend weight of slot j (unstructured
   /// lumigraph: angle + resolution penalty, zero when the point is not visible in keyframe j by a
   /// depth test against j's own depth, projects outside j, or j's depth is invalid there).
-  /// Where any slot is visible the k weights sum to 1; elsewhere all are 0.
+  /// Where any slot is visible the k weights sum to 1; elsewhere all are 0. Empty maps as colours'.
   std::vector<cv::Mat> weights;
   /// CV_32FC1 in [0, 1], per-pixel confidence of the blend: exp(-(a / angle_sigma)^2) with a the
   /// smallest ray angle of a visible slot, times the grazing factor; 0 where no slot is visible.
@@ -125,7 +126,9 @@ inline void PackRefinementInput(const ViewCandidates& c, std::vector<float>* out
   };
   for (int j = 0; j < k; ++j) {
     if (c.colours[j].size() != c.depth.size() || c.weights[j].size() != c.depth.size())
-      throw std::invalid_argument("PackRefinementInput: slot maps have the wrong size");
+      throw std::invalid_argument("PackRefinementInput: slot " + std::to_string(j) +
+                                  "'s colour / weight maps are missing or of the wrong size (render "
+                                  "the view with CandidateRequest::slot_planes true)");
     put3(c.colours[j], 3 * j);
     put1(c.weights[j], 3 * k + j, 1.0f);
   }

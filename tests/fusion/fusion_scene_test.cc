@@ -138,6 +138,33 @@ TEST_CASE("FusionScene: exclude_keyframe leaves a frame out of the colour source
   CHECK(c.coverage.mean_angle_deg > 0.5);  // its own view is no longer there
 }
 
+TEST_CASE("FusionScene: without slot planes the per-slot maps are empty, the blend the same", "[unit]") {
+  const PlaneScene scene;
+  const auto cam = Cam(48, 36, 45);
+  FusionScene fs(cam);
+  for (double x : {-0.1, 0.0, 0.1}) fs.AddFrame(scene.Render(At(x, 0, 0), cam));
+  const ViewCandidates full = fs.RenderCandidates(At(0.04, 0.01, 0), cam);
+  CandidateRequest req;
+  req.slot_planes = false;
+  const ViewCandidates lean = fs.RenderCandidates(At(0.04, 0.01, 0), cam, req);
+  REQUIRE(full.k() == 4);
+  REQUIRE(lean.k() == 4);
+  for (int j = 0; j < 4; ++j) {
+    CHECK(lean.colours[j].empty());
+    CHECK(lean.weights[j].empty());
+    CHECK_FALSE(full.weights[j].empty());
+  }
+  CHECK(cv::countNonZero(full.weights[0]) > 0);  // the full render did write the maps
+  CHECK(cv::norm(full.blended, lean.blended, cv::NORM_INF) == 0.0);
+  CHECK(cv::norm(full.confidence, lean.confidence, cv::NORM_INF) == 0.0);
+  CHECK(cv::norm(full.depth, lean.depth, cv::NORM_INF) == 0.0);
+  CHECK(lean.coverage.observed_fraction == full.coverage.observed_fraction);
+  CHECK(lean.coverage.score == full.coverage.score);
+  // A refinement cannot be fed from such a view: the packer says so.
+  std::vector<float> packed;
+  CHECK_THROWS_AS(PackRefinementInput(lean, &packed), std::invalid_argument);
+}
+
 TEST_CASE("FusionScene: keyframe_min_distance thins the keyframes, not the TSDF", "[unit]") {
   const PlaneScene scene;
   const auto cam = Cam(32, 24, 30);
