@@ -12,6 +12,7 @@
 #include "model/baseline_warp.h"
 #include "model/learned_refiner.h"
 #include "model/metrics.h"
+#include "model/push_pull_fill.h"
 #include "scene/image_ops.h"
 
 namespace p2i::refine {
@@ -97,10 +98,13 @@ SplitEvalReport EvaluateSplit(const scene::RgbdDataset& train, const scene::Rgbd
     auto fused = FuseAll(fuse_frames, options.loo.scene, options.loo.keyframe_every);
     for (const auto& gt : test_small.frames) cands.push_back(fused->Render(gt.pose, camera));
   }
+  // The blend as the fusion method serves it (FusionOptions::fill_holes, on by default): the
+  // pixels no surface covers push-pull filled, not left black.
   for (size_t i = 0; i < cands.size(); ++i) {
     scene::RgbdSample v;
     cands[i].blended.convertTo(v.rgb, CV_8UC3, 255.0);
-    v.depth = cands[i].depth;
+    v.depth = cands[i].depth.clone();
+    model::PushPullFillRgbd(v.rgb, v.depth, cands[i].depth > 0.0f);
     blend.Add(v, test_small.frames[i]);
     blend.s.observed += cands[i].coverage.observed_fraction;
   }
