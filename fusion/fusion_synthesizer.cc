@@ -21,10 +21,10 @@ void CheckCamera(const scene::CameraInfo& c, const std::string& what) {
     throw std::invalid_argument(what + ": the camera needs a positive size and focal length");
 }
 
-/// The view from the raycast maps: 8-bit RGB of `rgb` (float [0, 1]), the raycast depth, holes
-/// (depth 0) filled by push-pull when asked.
+}  // namespace
+
 scene::RgbdSample ToView(const scene::Pose& pose, const cv::Mat& rgb, const cv::Mat& depth, bool fill,
-                   const std::string& id) {
+                         const std::string& id) {
   scene::RgbdSample v;
   v.pose = pose;
   v.id = id;
@@ -33,8 +33,6 @@ scene::RgbdSample ToView(const scene::Pose& pose, const cv::Mat& rgb, const cv::
   if (fill) model::PushPullFillRgbd(v.rgb, v.depth, depth > 0.0f);
   return v;
 }
-
-}  // namespace
 
 FusionOptions FusionOptions::FromYaml(const YAML::Node& node, const std::string& source) {
   const scene::StrictYamlReader r(source);

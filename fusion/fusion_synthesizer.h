@@ -31,6 +31,13 @@ struct FusionOptions {
   void Validate() const { scene.Validate(); }
 };
 
+/// The view served from a surface's maps: 8-bit RGB of `rgb` (CV_32FC3 in [0, 1]), a copy of
+/// `depth`, and the pixels without a surface (depth 0) push-pull filled, RGB and depth, when
+/// `fill` (FusionOptions::fill_holes). The `fusion` and `open3d_tsdf` views, and `p2i refine
+/// eval`'s blend, are made here.
+scene::RgbdSample ToView(const scene::Pose& pose, const cv::Mat& rgb, const cv::Mat& depth, bool fill,
+                         const std::string& id);
+
 /// `fusion`. Built from training frames (all integrated and kept as keyframes) and fed more at
 /// any time with AddFrame. Render: RenderCandidates at the pose and the output camera, then the
 /// refiner when there is one, else the blend (8-bit) with the raycast depth; the hole filler's

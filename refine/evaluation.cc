@@ -8,11 +8,11 @@
 #include <memory>
 #include <stdexcept>
 
+#include "fusion/fusion_synthesizer.h"
 #include "model/baseline_nearest.h"
 #include "model/baseline_warp.h"
 #include "model/learned_refiner.h"
 #include "model/metrics.h"
-#include "model/push_pull_fill.h"
 #include "scene/image_ops.h"
 
 namespace p2i::refine {
@@ -63,6 +63,34 @@ scene::RgbdDataset Resized(const scene::RgbdDataset& d, int w, int h) {
   return out;
 }
 
+/// Nearest keyframe and depth warp (holes filled) over the training frames, on the test frames.
+std::vector<MethodScore> ScoreBaselines(const scene::RgbdDataset& train, const scene::RgbdDataset& test,
+                                        int warp_k) {
+  Acc nearest{{"nearest"}}, warp{{"warp"}};
+  model::NearestKeyframe nk(train);
+  model::DepthWarpOptions wo;
+  wo.k = warp_k;
+  wo.fill_holes = true;
+  model::DepthWarp dw(train, wo);
+  for (const auto& gt : test.frames) {
+    nearest.Add(nk.Render(gt.pose), gt);
+    warp.Add(dw.Render(gt.pose), gt);
+  }
+  return {nearest.Done(), warp.Done()};
+}
+
+/// The plain blend of each test view's candidates as the fusion method serves it (fusion::ToView
+/// with fill_holes, its default): the pixels no surface covers push-pull filled, not left black.
+MethodScore ScoreBlend(const std::vector<fusion::ViewCandidates>& cands, const scene::RgbdDataset& test) {
+  Acc blend{{"fusion_blend"}};
+  for (size_t i = 0; i < cands.size(); ++i) {
+    const auto& gt = test.frames[i];
+    blend.Add(fusion::ToView(gt.pose, cands[i].blended, cands[i].depth, true, "fusion_blend"), gt);
+    blend.s.observed += cands[i].coverage.observed_fraction;
+  }
+  return blend.Done();
+}
+
 }  // namespace
 
 SplitEvalReport EvaluateSplit(const scene::RgbdDataset& train, const scene::RgbdDataset& test,
@@ -80,35 +108,14 @@ SplitEvalReport EvaluateSplit(const scene::RgbdDataset& train, const scene::Rgbd
   const scene::CameraInfo camera = test_small.camera;
   const scene::RgbdDataset fuse_frames = Resized(train, options.fuse_width, options.fuse_height);
 
-  Acc nearest{{"nearest"}}, warp{{"warp"}}, blend{{"fusion_blend"}};
-  {
-    model::NearestKeyframe nk(train_small);
-    model::DepthWarpOptions wo;
-    wo.k = options.warp_k;
-    wo.fill_holes = true;
-    model::DepthWarp dw(train_small, wo);
-    for (const auto& gt : test_small.frames) {
-      nearest.Add(nk.Render(gt.pose), gt);
-      warp.Add(dw.Render(gt.pose), gt);
-    }
-  }
+  report.methods = ScoreBaselines(train_small, test_small, options.warp_k);
   // The test views' candidates from a scene fused from every training frame.
   std::vector<fusion::ViewCandidates> cands;
   {
     auto fused = FuseAll(fuse_frames, options.loo.scene, options.loo.keyframe_every);
     for (const auto& gt : test_small.frames) cands.push_back(fused->Render(gt.pose, camera));
   }
-  // The blend as the fusion method serves it (FusionOptions::fill_holes, on by default): the
-  // pixels no surface covers push-pull filled, not left black.
-  for (size_t i = 0; i < cands.size(); ++i) {
-    scene::RgbdSample v;
-    cands[i].blended.convertTo(v.rgb, CV_8UC3, 255.0);
-    v.depth = cands[i].depth.clone();
-    model::PushPullFillRgbd(v.rgb, v.depth, cands[i].depth > 0.0f);
-    blend.Add(v, test_small.frames[i]);
-    blend.s.observed += cands[i].coverage.observed_fraction;
-  }
-  report.methods = {nearest.Done(), warp.Done(), blend.Done()};
+  report.methods.push_back(ScoreBlend(cands, test_small));
 
   const auto score = [&](const std::string& name, fusion::ViewRefiner& r) {
     Acc a{{name}};
