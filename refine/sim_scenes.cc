@@ -3,6 +3,7 @@
 #include "refine/sim_scenes.h"
 
 #include <algorithm>
+#include <cmath>
 #include <random>
 #include <stdexcept>
 
@@ -15,9 +16,27 @@ void SimScenesOptions::Validate() const {
   if (frame_step < 1) throw std::invalid_argument("SimScenesOptions: frame_step must be >= 1");
   if (width < 8 || height < 8)
     throw std::invalid_argument("SimScenesOptions: width and height must be >= 8");
+  if (sensor != "kinect" && sensor != "realistic")
+    throw std::invalid_argument("SimScenesOptions: sensor '" + sensor +
+                                "' is not a sensor model (use kinect or realistic)");
+  if (!(pose_noise_m >= 0.0 && pose_noise_m <= 0.5) || !(pose_noise_deg >= 0.0 && pose_noise_deg <= 30.0))
+    throw std::invalid_argument("SimScenesOptions: pose_noise_m must be in [0, 0.5] and "
+                                "pose_noise_deg in [0, 30]");
 }
 
-scene::SimScene MakeSimVariant(const std::string& base, int index, uint64_t seed) {
+scene::Pose PerturbPose(const scene::Pose& pose, double sigma_m, double sigma_deg,
+                        std::mt19937_64& rng) {
+  std::normal_distribution<double> n(0.0, 1.0);
+  const Eigen::Vector3d dt(sigma_m * n(rng), sigma_m * n(rng), sigma_m * n(rng));
+  Eigen::Vector3d axis(n(rng), n(rng), n(rng));
+  if (axis.norm() < 1e-9) axis = Eigen::Vector3d::UnitZ();
+  const double angle = sigma_deg * n(rng) * M_PI / 180.0;
+  const Eigen::Quaterniond dq(Eigen::AngleAxisd(angle, axis.normalized()));
+  return scene::Pose(pose.translation() + dt, pose.rotation() * dq);
+}
+
+scene::SimScene MakeSimVariant(const std::string& base, int index, uint64_t seed,
+                               const std::string& sensor) {
   scene::SimSceneDescription d = scene::SimScene::BuiltIn(base).description();
   std::mt19937_64 rng(seed * 1000003ULL + static_cast<uint64_t>(index) * 7919ULL + 17);
   std::uniform_real_distribution<double> u(0.0, 1.0);
@@ -48,7 +67,9 @@ scene::SimScene MakeSimVariant(const std::string& base, int index, uint64_t seed
   d.Validate();
   scene::SimSensorOptions s;
   if (index % 3 != 0) {  // every third variant keeps the exact render
-    s = scene::SimSensorOptions::Kinect(static_cast<uint32_t>(rng()));
+    const auto sensor_seed = static_cast<uint32_t>(rng());
+    s = sensor == "realistic" ? scene::SimSensorOptions::Realistic(sensor_seed)
+                              : scene::SimSensorOptions::Kinect(sensor_seed);
     s.rgb_noise_sigma = 3.0 * u(rng);
     s.depth_dropout = 0.05 * u(rng);
   }
@@ -61,7 +82,7 @@ std::vector<SimTrainingScene> MakeSimScenes(const SimScenesOptions& options) {
   const scene::CameraInfo camera = scene::SimScene::DefaultCamera(options.width, options.height);
   for (int i = 0; i < options.scenes; ++i) {
     const std::string& base = options.bases[static_cast<size_t>(i) % options.bases.size()];
-    const scene::SimScene sim = MakeSimVariant(base, i, options.seed);
+    const scene::SimScene sim = MakeSimVariant(base, i, options.seed, options.sensor);
     scene::RandomWalkOptions walk;
     walk.seed = static_cast<uint32_t>(options.seed * 31 + static_cast<uint64_t>(i));
     walk.duration = (options.frames * options.frame_step + 1) / walk.rate_hz;
@@ -69,9 +90,18 @@ std::vector<SimTrainingScene> MakeSimScenes(const SimScenesOptions& options) {
     SimTrainingScene s;
     s.name = sim.description().name;
     s.frames.camera = camera;
+    // Its own stream, so the renders (and the scenes of pose_noise 0) do not change with it.
+    std::mt19937_64 pose_rng(options.seed * 7777ULL + static_cast<uint64_t>(i) * 104729ULL + 3);
+    const double noise_scale = std::uniform_real_distribution<double>(0.0, 1.0)(pose_rng);
+    const bool noisy = options.pose_noise_m > 0.0 || options.pose_noise_deg > 0.0;
     for (size_t k = 0; k < poses.size() && s.frames.frames.size() < static_cast<size_t>(options.frames);
          k += static_cast<size_t>(options.frame_step)) {
-      scene::RgbdSample f = sim.Render(poses[k].pose, camera, poses[k].stamp);
+      scene::RgbdSample f = sim.sensor_options().MotionBlur()
+                                ? sim.RenderOnTrajectory(poses, k, camera)
+                                : sim.Render(poses[k].pose, camera, poses[k].stamp);
+      if (noisy)
+        f.pose = PerturbPose(f.pose, noise_scale * options.pose_noise_m,
+                             noise_scale * options.pose_noise_deg, pose_rng);
       f.id = s.name + "/" + std::to_string(k);
       s.frames.frames.push_back(std::move(f));
     }

@@ -2,7 +2,8 @@
 /// @brief `p2i refine train-sim --out FILE`: trains the cross-scene refinement net of the fusion
 /// method on randomised sim scenes (leave-one-out). `p2i refine eval --data DIR --net FILE`:
 /// nearest keyframe, depth warp, the plain fusion blend, the refinement zero-shot and fine-tuned
-/// on each split's own leave-one-out samples, on the same test frames (docs/REFINE.md).
+/// on each split's own leave-one-out samples, on the same test frames (docs/EVALUATION.md
+/// "p2i refine", figures in docs/RESULTS.md "Refinement on real data").
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -27,6 +28,7 @@ int RunTrainSim(const std::vector<std::string>& args) {
                "p2i refine train-sim"};
   refine::CrossSceneOptions o;
   std::string out;
+  double pose_noise_cm = 0.0;
   app.add_option("--out,-o", out, "refinement file to write (e.g. models/refine_sim.pt)")->required();
   app.add_option("--scenes", o.scenes.scenes, "randomised scenes (the last --held-out only validate)");
   app.add_option("--held-out", o.held_out_scenes, "scenes kept for validation");
@@ -34,6 +36,12 @@ int RunTrainSim(const std::vector<std::string>& args) {
   app.add_option("--width", o.scenes.width, "frame size");
   app.add_option("--height", o.scenes.height, "frame size");
   app.add_option("--seed", o.scenes.seed, "scene randomisation seed");
+  app.add_option("--sensor", o.scenes.sensor, "sensor model of the noisy scenes: kinect or realistic")
+      ->check(CLI::IsMember({"kinect", "realistic"}));
+  app.add_option("--pose-noise-cm", pose_noise_cm,
+                 "recorded-pose error, translation sigma (cm; each scene draws a scale in [0, 1])");
+  app.add_option("--pose-noise-deg", o.scenes.pose_noise_deg,
+                 "recorded-pose error, rotation sigma (degrees; same per-scene scale)");
   app.add_option("--steps", o.fit.steps, "Adam steps");
   app.add_option("--batch", o.fit.batch_size, "batch size");
   app.add_option("--lr", o.fit.lr, "learning rate");
@@ -48,6 +56,7 @@ int RunTrainSim(const std::vector<std::string>& args) {
   } catch (const CLI::ParseError& e) {
     return CliExit(app, e);
   }
+  o.scenes.pose_noise_m = pose_noise_cm / 100.0;
   const auto parent = std::filesystem::path(out).parent_path();
   if (!parent.empty()) std::filesystem::create_directories(parent);
   const refine::CrossSceneReport r = refine::TrainCrossScene(o, out);

@@ -33,3 +33,51 @@ TEST_CASE("Randomised sim scenes are deterministic and differ from the base", "[
   o.frames = 1;
   CHECK_THROWS_AS(refine::MakeSimScenes(o), std::invalid_argument);
 }
+
+TEST_CASE("Randomised sim scenes: recorded-pose error and the realistic sensor", "[unit]") {
+  refine::SimScenesOptions o;
+  o.scenes = 2;
+  o.frames = 4;
+  o.width = 32;
+  o.height = 24;
+  const auto exact = refine::MakeSimScenes(o);
+  o.pose_noise_m = 0.02;
+  o.pose_noise_deg = 1.0;
+  const auto noisy = refine::MakeSimScenes(o);
+  REQUIRE(noisy.size() == exact.size());
+  double max_t = 0.0, max_r = 0.0;
+  for (size_t s = 0; s < exact.size(); ++s) {
+    REQUIRE(noisy[s].frames.frames.size() == exact[s].frames.frames.size());
+    for (size_t f = 0; f < exact[s].frames.frames.size(); ++f) {
+      const auto& a = exact[s].frames.frames[f];
+      const auto& b = noisy[s].frames.frames[f];
+      // The same image (rendered at the true pose), a different recorded pose.
+      CHECK(cv::norm(a.rgb, b.rgb, cv::NORM_INF) == 0.0);
+      const double t = scene::Pose::TranslationDistance(a.pose, b.pose);
+      const double r = scene::Pose::RotationDistanceDeg(a.pose, b.pose);
+      CHECK(t < 0.02 * 6.0);  // 6 sigma of a 3-d Gaussian's norm at most
+      CHECK(r < 1.0 * 6.0);
+      max_t = std::max(max_t, t);
+      max_r = std::max(max_r, r);
+    }
+  }
+  CHECK(max_t > 1e-4);
+  CHECK(max_r > 1e-3);
+
+  std::mt19937_64 rng(3);
+  const scene::Pose p = exact[0].frames.frames[0].pose;
+  CHECK(refine::PerturbPose(p, 0.0, 0.0, rng).equals(p, 1e-12));
+
+  CHECK_FALSE(refine::MakeSimVariant("small_office", 1, 7, "kinect").sensor_options().AnyColour());
+  const scene::SimScene real = refine::MakeSimVariant("small_office", 1, 7, "realistic");
+  CHECK(real.sensor_options().AnyColour());
+  CHECK(real.sensor_options().MotionBlur());
+  o.sensor = "realistic";
+  const auto blurred = refine::MakeSimScenes(o);
+  CHECK(cv::norm(blurred[1].frames.frames[1].rgb, exact[1].frames.frames[1].rgb, cv::NORM_L1) > 0.0);
+  o.sensor = "kinekt";
+  CHECK_THROWS_WITH(refine::MakeSimScenes(o), Catch::Contains("kinekt"));
+  o.sensor = "kinect";
+  o.pose_noise_m = -1.0;
+  CHECK_THROWS_AS(refine::MakeSimScenes(o), std::invalid_argument);
+}
