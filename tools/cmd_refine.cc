@@ -33,6 +33,8 @@ int RunTrainSim(const std::vector<std::string>& args) {
   app.add_option("--scenes", o.scenes.scenes, "randomised scenes (the last --held-out only validate)");
   app.add_option("--held-out", o.held_out_scenes, "scenes kept for validation");
   app.add_option("--frames", o.scenes.frames, "frames per scene");
+  app.add_option("--frame-step", o.scenes.frame_step,
+                 "poses of the 20 Hz walk between kept frames (5 = 5 cm and up to 7.5 degrees apart)");
   app.add_option("--width", o.scenes.width, "frame size");
   app.add_option("--height", o.scenes.height, "frame size");
   app.add_option("--seed", o.scenes.seed, "scene randomisation seed");
