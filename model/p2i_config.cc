@@ -74,6 +74,7 @@ void P2iConfig::Validate() const {
   if (!(r1_gamma >= 0)) fail("r1_gamma must be >= 0 (0 = off)");
   if (steps_phase1 < 0 || steps_phase2 < 0) fail("steps_phase1/2 must be >= 0");
   if (!(lr_g > 0 && lr_d > 0 && lr_enet > 0)) fail("learning rates must be > 0");
+  if (lr_decay_steps < 0) fail("lr_decay_steps must be >= 0 (0 = constant learning rates)");
   if (!(beta1 >= 0 && beta1 < 1 && beta2 >= 0 && beta2 < 1)) fail("betas must be in [0, 1)");
   if (!(depth_max > 0)) fail("depth_max must be > 0 metres");
   if (val_every < 1 || checkpoint_every < 1) fail("val_every and checkpoint_every must be >= 1");
@@ -130,6 +131,7 @@ P2iConfig P2iConfig::FromYamlString(const std::string& text, const std::string& 
       {"lr_g", [&](const YAML::Node& n) { c.lr_g = n.as<double>(); }},
       {"lr_d", [&](const YAML::Node& n) { c.lr_d = n.as<double>(); }},
       {"lr_enet", [&](const YAML::Node& n) { c.lr_enet = n.as<double>(); }},
+      {"lr_decay_steps", [&](const YAML::Node& n) { c.lr_decay_steps = n.as<int>(); }},
       {"beta1", [&](const YAML::Node& n) { c.beta1 = n.as<double>(); }},
       {"beta2", [&](const YAML::Node& n) { c.beta2 = n.as<double>(); }},
       {"seed", [&](const YAML::Node& n) { c.seed = n.as<uint64_t>(); }},
@@ -204,6 +206,7 @@ std::string P2iConfig::ToYamlString() const {
   e << YAML::Key << "lr_g" << YAML::Value << lr_g;
   e << YAML::Key << "lr_d" << YAML::Value << lr_d;
   e << YAML::Key << "lr_enet" << YAML::Value << lr_enet;
+  e << YAML::Key << "lr_decay_steps" << YAML::Value << lr_decay_steps;
   e << YAML::Key << "beta1" << YAML::Value << beta1;
   e << YAML::Key << "beta2" << YAML::Value << beta2;
   e << YAML::Key << "seed" << YAML::Value << seed;

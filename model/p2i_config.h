@@ -77,6 +77,10 @@ struct P2iConfig {
   double lr_g = 2e-4;
   double lr_d = 2e-4;
   double lr_enet = 1e-3;
+  /// Phase 1's last lr_decay_steps steps lower G's and D's learning rates linearly towards 0
+  /// (pix2pix's schedule: constant, then linear decay; not in the paper). 0 = constant (default).
+  /// A schedule key: on --resume the given config's value applies, like steps_phase1.
+  int lr_decay_steps = 0;
   double beta1 = 0.0;
   double beta2 = 0.9;
   uint64_t seed = 1;

@@ -147,6 +147,8 @@ class TrainingRun {
   void AfterStep(int phase, int done, int target, const StepOutcome& outcome, const char* name);
   // --- helpers
   void ApplyLearningRates();
+  /// Phase 1's learning-rate factor before `step` of `target` (config lr_decay_steps).
+  void DecayLearningRates(int step, int target);
   void Save();
   void Rollback(const std::string& why);
   CheckpointMeta LoadRollbackPoint();
@@ -172,6 +174,7 @@ class TrainingRun {
   Prepared train_, val_;
   std::ofstream log_;
   double ema_ = -1.0;
+  double decay_ = 1.0;  // phase 1's learning-rate factor (config lr_decay_steps)
   Validation last_val_;
   bool injected_ = false;
   bool stopped_ = false;
@@ -188,9 +191,19 @@ void TrainingRun::ApplyLearningRates() {
     for (auto& group : opt->param_groups())
       static_cast<torch::optim::AdamOptions&>(group.options()).lr(lr * meta_.lr_scale);
   };
-  set(opt_g_.get(), config_.lr_g);
-  set(opt_d_.get(), config_.lr_d);
+  set(opt_g_.get(), config_.lr_g * decay_);
+  set(opt_d_.get(), config_.lr_d * decay_);
   set(opt_e_.get(), config_.lr_enet);
+}
+
+void TrainingRun::DecayLearningRates(int step, int target) {
+  const int left = target - step;
+  const double decay = left >= config_.lr_decay_steps
+                           ? 1.0
+                           : static_cast<double>(left) / config_.lr_decay_steps;
+  if (decay == decay_) return;
+  decay_ = decay;
+  ApplyLearningRates();
 }
 
 void TrainingRun::Save() {
@@ -538,6 +551,7 @@ int TrainingRun::PhaseOne(int target) {
     const auto idx = BatchIndices(1, step, n);
     const auto real = train_.images.index_select(0, idx);
     const auto y = train_.poses.index_select(0, idx);
+    if (config_.lr_decay_steps > 0) DecayLearningRates(step, target);
     StepOutcome outcome;
     try {
       outcome = config_.IsBaseline() ? BaselineStep(step, real, y) : AdversarialStep(step, real, y);
@@ -546,6 +560,7 @@ int TrainingRun::PhaseOne(int target) {
       continue;
     }
     meta_.phase1_step = step + 1;
+    if (config_.lr_decay_steps > 0) outcome.line["lr_decay"] = decay_;
     AfterStep(1, meta_.phase1_step, target, outcome, name);
   }
   return meta_.phase1_step;
@@ -653,6 +668,7 @@ std::string TrainingRun::FindSource(CheckpointMeta* source) {
     config_ = source->config;
     config_.steps_phase1 = schedule.steps_phase1;
     config_.steps_phase2 = schedule.steps_phase2;
+    config_.lr_decay_steps = schedule.lr_decay_steps;
     config_.val_every = schedule.val_every;
     config_.checkpoint_every = schedule.checkpoint_every;
   }

@@ -126,6 +126,35 @@ TEST_CASE("resume after K steps equals an unbroken run of 2K steps", "[unit]") {
   fs::remove_all(dir_b);
 }
 
+TEST_CASE("lr_decay_steps lowers phase 1's learning rates linearly over the last steps", "[unit]") {
+  const auto data = MakeProceduralDataset(12, 32);
+  auto c = TinyConfig();
+  c.lr_decay_steps = 10;
+  const auto dir_a = TempDir("decay_a"), dir_b = TempDir("decay_b"), dir_c = TempDir("decay_c");
+  const auto report = Trainer(c, Quiet(dir_a, 20)).Run(data, data);
+  const auto log = ReadFile(report.log_path);
+  // Logged every 10 steps: step 10 is before the decay (factor 1), step 20 is its last (1/10).
+  CHECK(log.find("\"lr_decay\":1.0,") != std::string::npos);
+  CHECK(log.find("\"lr_decay\":0.1,") != std::string::npos);
+  auto constant = c;
+  constant.lr_decay_steps = 0;
+  const auto plain = Trainer(constant, Quiet(dir_b, 20)).Run(data, data);
+  CHECK(ReadFile(plain.log_path).find("lr_decay") == std::string::npos);
+  Networks a(c), b(c);
+  LoadCheckpoint(Trainer::CheckpointPath(dir_a), a, {}, false);
+  LoadCheckpoint(Trainer::CheckpointPath(dir_b), b, {}, false);
+  CHECK_FALSE(SameParameters(*a.g, *b.g));  // the decay reached the optimiser
+  // A schedule key: a resumed run takes the given config's value, not the checkpoint's.
+  Trainer(constant, Quiet(dir_c, 10)).Run(data, data);
+  const auto resumed = Trainer(c, Quiet(dir_c, 20, 1, /*resume=*/true)).Run(data, data);
+  CHECK(ReadFile(resumed.log_path).find("\"lr_decay\":0.1,") != std::string::npos);
+  c.lr_decay_steps = -1;
+  CHECK_THROWS_WITH(c.Validate(), Catch::Contains("lr_decay_steps"));
+  fs::remove_all(dir_a);
+  fs::remove_all(dir_b);
+  fs::remove_all(dir_c);
+}
+
 TEST_CASE("the divergence guard rolls back on an injected NaN and lowers the LR", "[unit]") {
   const auto data = MakeProceduralDataset(12, 32);
   const auto c = TinyConfig();
