@@ -87,6 +87,8 @@ std::string SensorDescription(const scene::SimScene& sim) {
          Fixed(o.white_balance_drift * 100, 0) + " %";
   }
   if (o.MotionBlur()) s += ", motion blur over " + Fixed(o.exposure_time_s * 1000, 0) + " ms";
+  if (o.PixelArea())
+    s += ", pixel area " + std::to_string(o.pixel_samples) + "x" + std::to_string(o.pixel_samples);
   return s + ", sensor seed " + std::to_string(o.seed);
 }
 

@@ -22,6 +22,9 @@ void SimScenesOptions::Validate() const {
   if (!(pose_noise_m >= 0.0 && pose_noise_m <= 0.5) || !(pose_noise_deg >= 0.0 && pose_noise_deg <= 30.0))
     throw std::invalid_argument("SimScenesOptions: pose_noise_m must be in [0, 0.5] and "
                                 "pose_noise_deg in [0, 30]");
+  if (pixel_samples < 1 || pixel_samples > 7 || pixel_samples % 2 == 0)
+    throw std::invalid_argument("SimScenesOptions: pixel_samples must be odd, 1 to 7 (got " +
+                                std::to_string(pixel_samples) + ")");
 }
 
 scene::Pose PerturbPose(const scene::Pose& pose, double sigma_m, double sigma_deg,
@@ -36,7 +39,7 @@ scene::Pose PerturbPose(const scene::Pose& pose, double sigma_m, double sigma_de
 }
 
 scene::SimScene MakeSimVariant(const std::string& base, int index, uint64_t seed,
-                               const std::string& sensor) {
+                               const std::string& sensor, int pixel_samples) {
   scene::SimSceneDescription d = scene::SimScene::BuiltIn(base).description();
   std::mt19937_64 rng(seed * 1000003ULL + static_cast<uint64_t>(index) * 7919ULL + 17);
   std::uniform_real_distribution<double> u(0.0, 1.0);
@@ -68,11 +71,11 @@ scene::SimScene MakeSimVariant(const std::string& base, int index, uint64_t seed
   scene::SimSensorOptions s;
   if (index % 3 != 0) {  // every third variant keeps the exact render
     const auto sensor_seed = static_cast<uint32_t>(rng());
-    s = sensor == "realistic" ? scene::SimSensorOptions::Realistic(sensor_seed)
-                              : scene::SimSensorOptions::Kinect(sensor_seed);
+    s = scene::SimSensorOptions::FromPreset(sensor, sensor_seed);
     s.rgb_noise_sigma = 3.0 * u(rng);
     s.depth_dropout = 0.05 * u(rng);
   }
+  s.pixel_samples = pixel_samples;
   return scene::SimScene(d, s);
 }
 
@@ -82,7 +85,7 @@ std::vector<SimTrainingScene> MakeSimScenes(const SimScenesOptions& options) {
   const scene::CameraInfo camera = scene::SimScene::DefaultCamera(options.width, options.height);
   for (int i = 0; i < options.scenes; ++i) {
     const std::string& base = options.bases[static_cast<size_t>(i) % options.bases.size()];
-    const scene::SimScene sim = MakeSimVariant(base, i, options.seed, options.sensor);
+    const scene::SimScene sim = MakeSimVariant(base, i, options.seed, options.sensor, options.pixel_samples);
     scene::RandomWalkOptions walk;
     walk.seed = static_cast<uint32_t>(options.seed * 31 + static_cast<uint64_t>(i));
     walk.duration = (options.frames * options.frame_step + 1) / walk.rate_hz;
@@ -96,9 +99,7 @@ std::vector<SimTrainingScene> MakeSimScenes(const SimScenesOptions& options) {
     const bool noisy = options.pose_noise_m > 0.0 || options.pose_noise_deg > 0.0;
     for (size_t k = 0; k < poses.size() && s.frames.frames.size() < static_cast<size_t>(options.frames);
          k += static_cast<size_t>(options.frame_step)) {
-      scene::RgbdSample f = sim.sensor_options().MotionBlur()
-                                ? sim.RenderOnTrajectory(poses, k, camera)
-                                : sim.Render(poses[k].pose, camera, poses[k].stamp);
+      scene::RgbdSample f = sim.RenderOnTrajectory(poses, k, camera);  // blur when the sensor has it
       if (noisy)
         f.pose = PerturbPose(f.pose, noise_scale * options.pose_noise_m,
                              noise_scale * options.pose_noise_deg, pose_rng);

@@ -36,6 +36,10 @@ struct SimScenesOptions {
   /// The TSDF, the blend and the leave-one-out queries all see the recorded poses. 0 = exact.
   double pose_noise_m = 0.0;
   double pose_noise_deg = 0.0;
+  /// Rays per pixel side of every variant's render (SimSensorOptions::pixel_samples: odd, 1-7):
+  /// 3 = pixels that integrate over their area, as a real camera's (and the study-room frames)
+  /// do; 1 = one ray per pixel, which aliases fine textures.
+  int pixel_samples = 1;
   void Validate() const;
 };
 
@@ -52,7 +56,7 @@ std::vector<SimTrainingScene> MakeSimScenes(const SimScenesOptions& options);
 /// The scene description of variant `index` (exposed for tests: materials and lights differ
 /// from the base).
 scene::SimScene MakeSimVariant(const std::string& base, int index, uint64_t seed,
-                               const std::string& sensor = "kinect");
+                               const std::string& sensor = "kinect", int pixel_samples = 1);
 
 /// `pose` perturbed by Gaussian translation (sigma `sigma_m` per axis) and a rotation of Gaussian
 /// angle (sigma `sigma_deg`) about a uniformly random axis. Exposed for tests.

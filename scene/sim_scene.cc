@@ -459,8 +459,8 @@ void Shade(const CompiledScene& sc, const FrameRays& r, const ZBuffer& zb, Linea
   }
 }
 
-LinearFrame RenderLinear(const CompiledScene& sc, const Pose& pose, const CameraInfo& camera,
-                         bool with_incidence) {
+LinearFrame RenderCentres(const CompiledScene& sc, const Pose& pose, const CameraInfo& camera,
+                          bool with_incidence) {
   const FrameRays rays = MakeFrameRays(pose, camera);
   ZBuffer zbuf(static_cast<std::size_t>(rays.w) * rays.h);
   RasterRoom(sc, rays, &zbuf);
@@ -471,6 +471,48 @@ LinearFrame RenderLinear(const CompiledScene& sc, const Pose& pose, const Camera
   return f;
 }
 
+/// The camera whose n x n pixels tile each pixel of `camera`: pixel (n u + j, n v + k) looks
+/// through (u + (j + 0.5) / n - 0.5, v + (k + 0.5) / n - 0.5) of `camera` (pixel centres at
+/// integer coordinates), so for odd n the middle one is the centre ray.
+CameraInfo SubPixelCamera(const CameraInfo& camera, int n) {
+  return CameraInfo::Pinhole(camera.image_width * n, camera.image_height * n, camera.fx() * n,
+                             camera.fy() * n, n * (camera.cx() + 0.5) - 0.5,
+                             n * (camera.cy() + 0.5) - 0.5);
+}
+
+/// The linear frame at `camera`: colour the mean of n x n rays over each pixel's area (n odd),
+/// depth and incidence those of the centre ray.
+LinearFrame RenderLinear(const CompiledScene& sc, const Pose& pose, const CameraInfo& camera,
+                         bool with_incidence, int n) {
+  if (n <= 1) return RenderCentres(sc, pose, camera, with_incidence);
+  const LinearFrame fine = RenderCentres(sc, pose, SubPixelCamera(camera, n), with_incidence);
+  LinearFrame f;
+  f.w = camera.image_width, f.h = camera.image_height;
+  f.rgb.assign(static_cast<std::size_t>(f.w) * f.h * 3, 0.0f);
+  f.depth.create(f.h, f.w, CV_32FC1);
+  if (with_incidence) f.incidence_cos.resize(static_cast<std::size_t>(f.w) * f.h);
+  const float inv = 1.0f / static_cast<float>(n * n);
+  const int mid = n / 2;
+  for (int v = 0; v < f.h; ++v) {
+    float* depth_row = f.depth.ptr<float>(v);
+    for (int u = 0; u < f.w; ++u) {
+      const std::size_t i = static_cast<std::size_t>(v) * f.w + u;
+      float* out = &f.rgb[3 * i];
+      for (int k = 0; k < n; ++k) {
+        const float* in = &fine.rgb[3 * ((static_cast<std::size_t>(v) * n + k) * fine.w +
+                                         static_cast<std::size_t>(u) * n)];
+        for (int j = 0; j < 3 * n; ++j) out[j % 3] += in[j];
+      }
+      for (int c = 0; c < 3; ++c) out[c] *= inv;
+      const int cv = v * n + mid, cu = u * n + mid;
+      depth_row[u] = fine.depth.at<float>(cv, cu);
+      if (with_incidence)
+        f.incidence_cos[i] = fine.incidence_cos[static_cast<std::size_t>(cv) * fine.w + cu];
+    }
+  }
+  return f;
+}
+
 // Depth of a moving camera: a pixel whose surface changes during the shutter time by more than
 // this (relative) mixes two surfaces, which a depth sensor reports as a hole.
 constexpr float kMixedDepth = 0.05f;
@@ -478,12 +520,12 @@ constexpr float kMixedDepth = 0.05f;
 /// Motion blur: RGB becomes the mean of `samples` renders at poses evenly spread from shutter
 /// open to close; depth keeps the frame's own pose, with holes where the surface changed.
 void BlurOverShutter(const CompiledScene& sc, const CameraInfo& camera, const Pose& open,
-                     const Pose& close, int samples, LinearFrame* f) {
+                     const Pose& close, int samples, int pixel_samples, LinearFrame* f) {
   std::vector<float> sum(f->rgb.size(), 0.0f);
   cv::Mat mixed = cv::Mat::zeros(f->h, f->w, CV_8UC1);
   for (int s = 0; s < samples; ++s) {
     const Pose p = Pose::Interpolate(open, close, (s + 0.5) / samples);
-    const LinearFrame sub = RenderLinear(sc, p, camera, false);
+    const LinearFrame sub = RenderLinear(sc, p, camera, false, pixel_samples);
     for (std::size_t k = 0; k < sum.size(); ++k) sum[k] += sub.rgb[k];
     for (int v = 0; v < f->h; ++v) {
       const float* z = f->depth.ptr<float>(v);
@@ -618,10 +660,11 @@ RgbdSample SimScene::RenderImpl(const Pose& camera_to_world, const CameraInfo& c
                                 bool stamped, const SimExposure* exposure) const {
   const Compiled& sc = *compiled_;
   const bool noise = sensor_.AnyNoise();
-  LinearFrame f = RenderLinear(sc, camera_to_world, camera, noise);
+  LinearFrame f = RenderLinear(sc, camera_to_world, camera, noise, sensor_.pixel_samples);
   if (exposure != nullptr && sensor_.MotionBlur() &&
       !exposure->open.equals(exposure->close, 0.0)) {
-    BlurOverShutter(sc, camera, exposure->open, exposure->close, sensor_.motion_blur_samples, &f);
+    BlurOverShutter(sc, camera, exposure->open, exposure->close, sensor_.motion_blur_samples,
+                    sensor_.pixel_samples, &f);
   }
   RgbdSample out;
   out.pose = camera_to_world;

@@ -35,6 +35,21 @@ SimSensorOptions SimSensorOptions::Realistic(std::uint32_t seed) {
   return o;
 }
 
+bool SimSensorOptions::IsPreset(const std::string& preset) {
+  return preset == "none" || preset == "kinect" || preset == "realistic";
+}
+
+SimSensorOptions SimSensorOptions::FromPreset(const std::string& preset, std::uint32_t seed) {
+  if (preset == "kinect") return Kinect(seed);
+  if (preset == "realistic") return Realistic(seed);
+  if (preset != "none")
+    throw std::invalid_argument("sensor preset '" + preset +
+                                "' is unknown (use none, kinect or realistic)");
+  SimSensorOptions o;
+  o.seed = seed;
+  return o;
+}
+
 namespace {
 
 struct Field {
@@ -74,7 +89,7 @@ SimSensorOptions SimSensorOptions::FromYaml(const YAML::Node& node, const std::s
   SimSensorOptions o;
   if (!node.IsDefined() || node.IsNull()) return o;
   if (!node.IsMap()) fail(node, "must be a map");
-  std::set<std::string> keys = {"preset", "seed", "motion_blur_samples"};
+  std::set<std::string> keys = {"preset", "seed", "motion_blur_samples", "pixel_samples"};
   for (const Field& f : kFields) keys.insert(f.key);
   for (const auto& kv : node) {
     const std::string key = kv.first.as<std::string>();
@@ -86,13 +101,9 @@ SimSensorOptions SimSensorOptions::FromYaml(const YAML::Node& node, const std::s
   }
   if (node["preset"]) {
     const std::string preset = node["preset"].as<std::string>();
-    if (preset == "kinect") {
-      o = Kinect();
-    } else if (preset == "realistic") {
-      o = Realistic();
-    } else if (preset != "none") {
+    if (!IsPreset(preset))
       fail(node["preset"], "unknown preset '" + preset + "' (use none, kinect or realistic)");
-    }
+    o = FromPreset(preset);
   }
   for (const Field& f : kFields) {
     if (!node[f.key]) continue;
@@ -112,6 +123,7 @@ SimSensorOptions SimSensorOptions::FromYaml(const YAML::Node& node, const std::s
   };
   get_int("seed", &o.seed);
   get_int("motion_blur_samples", &o.motion_blur_samples);
+  get_int("pixel_samples", &o.pixel_samples);
   try {
     o.Validate();
   } catch (const std::invalid_argument& e) {
@@ -153,6 +165,10 @@ void SimSensorOptions::Validate() const {
   if (motion_blur_samples < 1 || motion_blur_samples > 64) {
     throw std::invalid_argument("motion_blur_samples must be in [1, 64] (got " +
                                 std::to_string(motion_blur_samples) + ")");
+  }
+  if (pixel_samples < 1 || pixel_samples > 7 || pixel_samples % 2 == 0) {
+    throw std::invalid_argument("pixel_samples must be odd, 1 to 7 (got " +
+                                std::to_string(pixel_samples) + "): the centre ray gives depth");
   }
   if (max_range > 0.0 && min_range >= max_range) {
     throw std::invalid_argument("min_range (" + Num(min_range) + ") must be below max_range (" +

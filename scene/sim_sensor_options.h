@@ -41,13 +41,26 @@ struct SimSensorOptions {
   double exposure_time_s = 0.0;  ///< shutter time: RGB averages the camera's motion over it (0 =
                                  ///< no blur; needs the shutter poses, see SimScene)
   int motion_blur_samples = 5;   ///< renders averaged over the shutter time
+  // Pixel area.
+  /// N: each pixel's colour is the mean of N x N rays spread evenly over its area, as a camera
+  /// pixel integrates the light over its area (no aliasing of fine texture). Odd, 1 to 7; 1 = one
+  /// ray through the pixel's centre (the exact render). Depth, holes and noise come from the
+  /// centre ray either way.
+  int pixel_samples = 1;
   std::uint32_t seed = 0;
 
   /// Roughly a Kinect v1: 0.5-4.5 m range, quadratic depth noise, holes beyond 75 degrees.
   static SimSensorOptions Kinect(std::uint32_t seed = 0);
   /// The bench's sensor model: Kinect depth plus auto-exposure (strength 0.6), exposure drift
-  /// 8 %, white-balance drift 4 % and a 30 ms shutter (motion blur, 5 samples).
+  /// 8 %, white-balance drift 4 % and a 30 ms shutter (motion blur, 5 samples). One ray per
+  /// pixel (pixel_samples 1), so that the figures of earlier bench runs stay reproducible: add
+  /// `pixel_samples: 3` for pixels that integrate over their area (docs/SCENE.md).
   static SimSensorOptions Realistic(std::uint32_t seed = 0);
+  /// The options of a preset by name: "none" (all off), "kinect" or "realistic". Throws
+  /// std::invalid_argument naming the preset and the allowed names otherwise.
+  static SimSensorOptions FromPreset(const std::string& preset, std::uint32_t seed = 0);
+  /// True when `preset` names one of FromPreset's presets.
+  static bool IsPreset(const std::string& preset);
 
   /// Keys: preset (none|kinect|realistic, applied first), then any field above by its name.
   /// Throws std::runtime_error naming `source`, the line and the key on an unknown key or a bad
@@ -57,12 +70,13 @@ struct SimSensorOptions {
   /// Throws std::invalid_argument naming the field and its value when it is out of range.
   void Validate() const;
 
-  bool AnyEnabled() const { return AnyNoise() || AnyColour() || MotionBlur(); }
+  bool AnyEnabled() const { return AnyNoise() || AnyColour() || MotionBlur() || PixelArea(); }
   /// Depth effects or RGB noise (the per-pixel random pass).
   bool AnyNoise() const;
   /// Auto-exposure, exposure drift or white-balance drift (per-frame gains).
   bool AnyColour() const;
   bool MotionBlur() const { return exposure_time_s > 0.0 && motion_blur_samples > 1; }
+  bool PixelArea() const { return pixel_samples > 1; }
 };
 
 }  // namespace p2i::scene

@@ -40,6 +40,9 @@ int RunTrainSim(const std::vector<std::string>& args) {
   app.add_option("--seed", o.scenes.seed, "scene randomisation seed");
   app.add_option("--sensor", o.scenes.sensor, "sensor model of the noisy scenes: kinect or realistic")
       ->check(CLI::IsMember({"kinect", "realistic"}));
+  app.add_option("--pixel-samples", o.scenes.pixel_samples,
+                 "rays per pixel side of the sim renders (odd, 1-7; 3 = pixels that integrate over "
+                 "their area, as a real camera's)");
   app.add_option("--pose-noise-cm", pose_noise_cm,
                  "recorded-pose error, translation sigma (cm; each scene draws a scale in [0, 1])");
   app.add_option("--pose-noise-deg", o.scenes.pose_noise_deg,

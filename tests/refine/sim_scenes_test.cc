@@ -7,6 +7,20 @@
 
 using namespace p2i;
 
+namespace {
+
+// Small, fast scenes: two of `frames` frames each at 32x24.
+refine::SimScenesOptions SmallScenes(int frames) {
+  refine::SimScenesOptions o;
+  o.scenes = 2;
+  o.frames = frames;
+  o.width = 32;
+  o.height = 24;
+  return o;
+}
+
+}  // namespace
+
 TEST_CASE("Randomised sim scenes are deterministic and differ from the base", "[unit]") {
   const scene::SimScene base = scene::SimScene::BuiltIn("small_office");
   const scene::SimScene a = refine::MakeSimVariant("small_office", 1, 7);
@@ -18,11 +32,7 @@ TEST_CASE("Randomised sim scenes are deterministic and differ from the base", "[
   CHECK(a.description().lights[0].intensity != base.description().lights[0].intensity);
   CHECK(a.sensor_options().AnyEnabled());  // index 1: sensor model on
 
-  refine::SimScenesOptions o;
-  o.scenes = 2;
-  o.frames = 3;
-  o.width = 32;
-  o.height = 24;
+  refine::SimScenesOptions o = SmallScenes(3);
   const auto scenes = refine::MakeSimScenes(o);
   REQUIRE(scenes.size() == 2);
   CHECK(scenes[0].name == "small_office_v0");
@@ -35,11 +45,7 @@ TEST_CASE("Randomised sim scenes are deterministic and differ from the base", "[
 }
 
 TEST_CASE("Randomised sim scenes: recorded-pose error and the realistic sensor", "[unit]") {
-  refine::SimScenesOptions o;
-  o.scenes = 2;
-  o.frames = 4;
-  o.width = 32;
-  o.height = 24;
+  refine::SimScenesOptions o = SmallScenes(4);
   const auto exact = refine::MakeSimScenes(o);
   o.pose_noise_m = 0.02;
   o.pose_noise_deg = 1.0;
@@ -75,6 +81,15 @@ TEST_CASE("Randomised sim scenes: recorded-pose error and the realistic sensor",
   o.sensor = "realistic";
   const auto blurred = refine::MakeSimScenes(o);
   CHECK(cv::norm(blurred[1].frames.frames[1].rgb, exact[1].frames.frames[1].rgb, cv::NORM_L1) > 0.0);
+  o.sensor = "kinect";
+  o.pixel_samples = 3;  // the same scenes, each pixel's colour averaged over its area
+  const auto area = refine::MakeSimScenes(o);
+  CHECK(area[0].frames.frames[0].rgb.size() == exact[0].frames.frames[0].rgb.size());
+  CHECK(cv::norm(area[0].frames.frames[0].rgb, exact[0].frames.frames[0].rgb, cv::NORM_L1) > 0.0);
+  CHECK(refine::MakeSimVariant("small_office", 0, 7, "kinect", 3).sensor_options().pixel_samples == 3);
+  o.pixel_samples = 2;
+  CHECK_THROWS_WITH(refine::MakeSimScenes(o), Catch::Contains("pixel_samples"));
+  o.pixel_samples = 1;
   o.sensor = "kinekt";
   CHECK_THROWS_WITH(refine::MakeSimScenes(o), Catch::Contains("kinekt"));
   o.sensor = "kinect";
