@@ -46,6 +46,7 @@ ViewCandidates EmptyCandidates(const scene::Pose& pose, const scene::CameraInfo&
   c.observed = cv::Mat::zeros(h, w, CV_8UC1);
   c.confidence = cv::Mat::zeros(h, w, CV_32FC1);
   c.blended = cv::Mat::zeros(h, w, CV_32FC3);
+  c.far = cv::Mat::zeros(h, w, CV_8UC1);
   c.colours.assign(static_cast<size_t>(k), cv::Mat());
   c.weights.assign(static_cast<size_t>(k), cv::Mat());
   if (!slot_planes) return c;
@@ -125,11 +126,15 @@ class KeyframeBlender {
     res_w_ = static_cast<float>(bo.resolution_weight), eps_ = static_cast<float>(bo.penalty_epsilon);
     floor_g_ = static_cast<float>(bo.grazing_floor);
     sigma_ = static_cast<float>(bo.angle_sigma_deg / kRadToDeg);
+    far_z_ = static_cast<float>(bo.far_depth_m);
   }
 
   // Pixel (u, v) with raycast depth z and camera-frame normal n into c.
   void Pixel(int u, int v, float z, const cv::Vec3f& n, ViewCandidates* c, BlendStats* stats) {
-    if (!(z > 0.0f)) return;
+    if (!(z > 0.0f)) {
+      if (far_z_ > 0.0f) FarField(u, v, c);
+      return;
+    }
     ++stats->observed;
     c->observed.at<uint8_t>(v, u) = 255;
     const Eigen::Vector3f xc((u - cx_) / fx_ * z, (v - cy_) / fy_ * z, z);
@@ -147,6 +152,47 @@ class KeyframeBlender {
   }
 
  private:
+  // A pixel without a fused surface: the slots' colours of the point far_z_ along its ray, from
+  // the slots that saw nothing nearer than 0.8 far_z_ at its projection, weighted by ray angle.
+  void FarField(int u, int v, ViewCandidates* c) {
+    const Eigen::Vector3f xc((u - cx_) / fx_ * far_z_, (v - cy_) / fy_ * far_z_, far_z_);
+    const Eigen::Vector3f xw = r_wc_ * xc + centre_;
+    const Eigen::Vector3f dir = (xw - centre_) / xc.norm();
+    float p_max = 0.0f;
+    int n_vis = 0;
+    for (size_t j = 0; j < slots_.size(); ++j) {
+      vis_[j] = false;
+      const Slot& s = slots_[j];
+      const Eigen::Vector3f xk = s.r_kw * xw + s.t_kw;
+      if (!(xk.z() > 1e-4f)) continue;
+      const float pu = kfx_ * xk.x() / xk.z() + kcx_, pv = kfy_ * xk.y() / xk.z() + kcy_;
+      if (!(pu >= 0.0f && pv >= 0.0f && pu <= kw_ - 1.0f && pv <= kh_ - 1.0f)) continue;
+      float lu = pu, lv = pv;
+      ToPyramidLevel(level_, s.depth->cols, s.depth->rows, &lu, &lv);
+      const float dk = s.depth->at<float>(static_cast<int>(lv + 0.5f), static_cast<int>(lu + 0.5f));
+      if (dk > 0.0f && dk < 0.8f * far_z_) continue;  // it saw something nearer there
+      const Eigen::Vector3f to_k = s.centre - xw;
+      pen_[j] = AngleFromSinCos(dir.cross(to_k).norm(), -dir.dot(to_k));
+      col_[j] = bicubic_ ? SampleBicubic(*s.colour, lu, lv) : SampleBilinear(*s.colour, lu, lv);
+      vis_[j] = true;
+      p_max = std::max(p_max, pen_[j]);
+      ++n_vis;
+    }
+    if (n_vis == 0) return;
+    p_max = 1.5f * p_max + eps_;
+    float wsum = 0.0f;
+    cv::Vec3f out(0.0f, 0.0f, 0.0f);
+    for (size_t j = 0; j < slots_.size(); ++j) {
+      if (!vis_[j]) continue;
+      const float q = 1.0f - pen_[j] / p_max;
+      const float w = q * q / (pen_[j] + eps_);
+      wsum += w;
+      out += w * col_[j];
+    }
+    c->blended.at<cv::Vec3f>(v, u) = out / wsum;
+    c->far.at<uint8_t>(v, u) = 255;
+  }
+
   // Visibility, penalty, angle, grazing factor and colour of each slot for world point xw;
   // returns how many slots see it, *p_max the largest penalty among them.
   int ScoreSlots(const Eigen::Vector3f& xw, const Eigen::Vector3f& dir, const Eigen::Vector3f& nw,
@@ -219,7 +265,7 @@ class KeyframeBlender {
   Eigen::Vector3f centre_;
   float fx_, fy_, cx_, cy_, kfx_, kfy_, kcx_, kcy_;
   int kw_, kh_;
-  float vis_abs_, vis_rel_, res_w_, eps_, floor_g_, sigma_;
+  float vis_abs_, vis_rel_, res_w_, eps_, floor_g_, sigma_, far_z_;
   bool bicubic_ = true;
   std::array<float, 16> pen_{}, graze_{}, ang_{}, wgt_{};
   std::array<cv::Vec3f, 16> col_{};
@@ -233,7 +279,7 @@ BlendOptions BlendOptions::FromYaml(const YAML::Node& node, const std::string& s
   r.CheckKeys(node,
               {"k", "metres_per_degree", "visibility_abs_m", "visibility_rel", "resolution_weight",
                "penalty_epsilon", "grazing_floor", "angle_sigma_deg", "keyframe_min_distance",
-               "sampling", "keyframe_levels"},
+               "sampling", "keyframe_levels", "far_depth_m"},
               "blend options");
   BlendOptions o;
   if (node["k"]) o.k = r.Int(node["k"], "k");
@@ -245,6 +291,7 @@ BlendOptions BlendOptions::FromYaml(const YAML::Node& node, const std::string& s
   r.OptionalDouble(node, "grazing_floor", "blend", &o.grazing_floor);
   r.OptionalDouble(node, "angle_sigma_deg", "blend", &o.angle_sigma_deg);
   r.OptionalDouble(node, "keyframe_min_distance", "blend", &o.keyframe_min_distance);
+  r.OptionalDouble(node, "far_depth_m", "blend", &o.far_depth_m);
   if (node["sampling"]) o.sampling = r.String(node["sampling"], "sampling");
   if (node["keyframe_levels"]) o.keyframe_levels = r.Int(node["keyframe_levels"], "keyframe_levels");
   try {
@@ -267,6 +314,8 @@ void BlendOptions::Validate() const {
   if (!(angle_sigma_deg > 0.0) || !std::isfinite(angle_sigma_deg)) fail("angle_sigma_deg must be > 0");
   if (!(keyframe_min_distance >= 0.0) || !std::isfinite(keyframe_min_distance))
     fail("keyframe_min_distance must be >= 0");
+  if (!(far_depth_m >= 0.0) || !std::isfinite(far_depth_m))
+    fail("far_depth_m must be >= 0 (0 = off), got " + std::to_string(far_depth_m));
   if (keyframe_levels < 0 || keyframe_levels > 6)
     fail("keyframe_levels must be in [0, 6], got " + std::to_string(keyframe_levels));
   if (sampling != "auto" && sampling != "bicubic" && sampling != "bilinear")

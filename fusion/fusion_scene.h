@@ -55,6 +55,12 @@ struct BlendOptions {
   /// above its own focal length, at most this many halvings down (0 = always read the keyframe
   /// itself, unfiltered). A view at the camera's resolution reads the keyframe either way.
   int keyframe_levels = 3;
+  /// Pixels whose ray finds no fused surface (beyond the depth sensor's range, windows, dropout)
+  /// take their colour from the slots as if the scene were this far along the ray, from the slots
+  /// that saw nothing nearer than 0.8 x this there (their own depth invalid or beyond it); depth
+  /// stays 0 (no geometry), ViewCandidates::far marks them. 0 = off (they stay holes for the
+  /// hole fill). Default: the TSDF's default depth_max_m.
+  double far_depth_m = 5.0;
   static BlendOptions FromYaml(const YAML::Node& node, const std::string& source);
   void Validate() const;
 };

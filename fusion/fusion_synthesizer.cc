@@ -24,13 +24,18 @@ void CheckCamera(const scene::CameraInfo& c, const std::string& what) {
 }  // namespace
 
 scene::RgbdSample ToView(const scene::Pose& pose, const cv::Mat& rgb, const cv::Mat& depth, bool fill,
-                         const std::string& id) {
+                         const std::string& id, const cv::Mat& far) {
   scene::RgbdSample v;
   v.pose = pose;
   v.id = id;
   rgb.convertTo(v.rgb, CV_8UC3, 255.0);
   v.depth = depth.clone();
-  if (fill) model::PushPullFillRgbd(v.rgb, v.depth, depth > 0.0f);
+  if (!fill) return v;
+  const bool any_far = !far.empty() && cv::countNonZero(far) > 0;
+  cv::Mat far_rgb;
+  if (any_far) v.rgb.copyTo(far_rgb);
+  model::PushPullFillRgbd(v.rgb, v.depth, depth > 0.0f);
+  if (any_far) far_rgb.copyTo(v.rgb, far);  // their colour is the far field's, not the fill's
   return v;
 }
 
@@ -110,15 +115,20 @@ scene::RgbdSample FusionSynthesizer::RenderAt(const scene::Pose& pose, const sce
     v = refiner_->Refine(c);
     v.pose = pose;
   } else {
-    v = ToView(pose, c.blended, c.depth, options_.fill_holes && !filler_, "fusion");
+    v = ToView(pose, c.blended, c.depth, options_.fill_holes && !filler_, "fusion", c.far);
   }
   if (!filler_) return v;
-  const cv::Mat hole = c.depth <= 0.0f;
+  const cv::Mat hole = (c.depth <= 0.0f) & (c.far == 0);  // the far field keeps its colour
   if (cv::countNonZero(hole) > 0) {
     last_filler_fraction_ = FillFrom(*filler_, pose, camera, hole, &v) /
                             (static_cast<double>(camera.image_width) * camera.image_height);
   }
-  if (!refiner_ && options_.fill_holes) model::PushPullFillRgbd(v.rgb, v.depth, v.depth > 0.0f);
+  if (!refiner_ && options_.fill_holes) {
+    cv::Mat far_rgb;
+    v.rgb.copyTo(far_rgb);
+    model::PushPullFillRgbd(v.rgb, v.depth, v.depth > 0.0f);
+    far_rgb.copyTo(v.rgb, c.far);
+  }
   return v;
 }
 

@@ -33,10 +33,11 @@ struct FusionOptions {
 
 /// The view served from a surface's maps: 8-bit RGB of `rgb` (CV_32FC3 in [0, 1]), a copy of
 /// `depth`, and the pixels without a surface (depth 0) push-pull filled, RGB and depth, when
-/// `fill` (FusionOptions::fill_holes). The `fusion` and `open3d_tsdf` views, and `p2i refine
-/// eval`'s blend, are made here.
+/// `fill` (FusionOptions::fill_holes), except the RGB of the pixels set in `far` (CV_8UC1, may be
+/// empty: ViewCandidates::far), which already hold a far-field colour. The `fusion` and
+/// `open3d_tsdf` views, and `p2i refine eval`'s blend, are made here.
 scene::RgbdSample ToView(const scene::Pose& pose, const cv::Mat& rgb, const cv::Mat& depth, bool fill,
-                         const std::string& id);
+                         const std::string& id, const cv::Mat& far = cv::Mat());
 
 /// `fusion`. Built from training frames (all integrated and kept as keyframes) and fed more at
 /// any time with AddFrame. Render: RenderCandidates at the pose and the output camera, then the

@@ -71,6 +71,9 @@ struct ViewCandidates {
   /// CV_32FC3 RGB in [0, 1]: sum_j weights[j] * colours[j] where any slot is visible, tsdf_colour
   /// on the remaining observed pixels, 0 where depth is 0 (no hole fill here).
   cv::Mat blended;
+  /// CV_8UC1, 255 where depth is 0 but `blended` holds a far-field colour (BlendOptions::
+  /// far_depth_m: keyframes that saw nothing in range there); 0 elsewhere.
+  cv::Mat far;
 
   std::vector<int> keyframe_indices;    ///< per slot: index into the scene's keyframes, -1 = none
   std::vector<std::string> keyframe_ids;

@@ -85,7 +85,7 @@ MethodScore ScoreBlend(const std::vector<fusion::ViewCandidates>& cands, const s
   Acc blend{{"fusion_blend"}};
   for (size_t i = 0; i < cands.size(); ++i) {
     const auto& gt = test.frames[i];
-    blend.Add(fusion::ToView(gt.pose, cands[i].blended, cands[i].depth, true, "fusion_blend"), gt);
+    blend.Add(fusion::ToView(gt.pose, cands[i].blended, cands[i].depth, true, "fusion_blend", cands[i].far), gt);
     blend.s.observed += cands[i].coverage.observed_fraction;
   }
   return blend.Done();

@@ -119,6 +119,7 @@ TEST_CASE("fusion: a hole filler colours only what the TSDF never observed", "[u
   first.frames.assign(all.frames.begin(), all.frames.begin() + 3);
   FusionOptions raw;
   raw.fill_holes = false;
+  raw.scene.blend.far_depth_m = 0.0;  // every unobserved pixel is the filler's (far field: below)
   FusionSynthesizer plain(first, raw);
   // The first later frame whose view the 3 fused frames cover only in part.
   scene::Pose late;
@@ -155,7 +156,9 @@ TEST_CASE("fusion: a hole filler colours only what the TSDF never observed", "[u
   CHECK(wrong_observed == 0);
 
   // With fill_holes, push-pull fills only what the filler left invalid (its column 0).
-  FusionSynthesizer both(first);
+  FusionOptions fill;
+  fill.scene.blend.far_depth_m = 0.0;
+  FusionSynthesizer both(first, fill);
   both.SetHoleFiller(filler);
   const scene::RgbdSample b = both.Render(late);
   CHECK(cv::countNonZero(b.depth > 0.0f) == 48 * 48);
@@ -173,6 +176,56 @@ TEST_CASE("fusion: a hole filler colours only what the TSDF never observed", "[u
   // No filler: LastFillerFraction stays 0.
   plain.Render(late);
   CHECK(plain.LastFillerFraction() == 0.0);
+}
+
+TEST_CASE("fusion: beyond the depth sensor's range it shows the keyframes' far field, not a smear",
+          "[unit]") {
+  const auto exact = scene::SimScene::BuiltIn("small_office");
+  scene::SimSensorOptions so;
+  so.max_range = 2.5;  // the far part of the room has no depth, only colour
+  const scene::SimScene limited(exact.description(), so);
+  const scene::RgbdDataset train = Sweep(limited, 64, 4);
+  FusionOptions on, off;
+  on.fill_holes = false;
+  off.fill_holes = false;
+  off.scene.blend.far_depth_m = 0.0;
+  FusionSynthesizer with_far(train, on), without(train, off);
+  FusionSynthesizer filled(train);  // the defaults: far field on, holes filled
+  FusionOptions smear_options;
+  smear_options.scene.blend.far_depth_m = 0.0;
+  FusionSynthesizer smear(train, smear_options);
+  const auto sweep = scene::GenerateArmSweep({});
+  double sq_far = 0.0, sq_smear = 0.0;
+  int64_t beyond_px = 0, far_px = 0, changed_observed = 0, far_on_surface = 0;
+  for (size_t i = 6; i + 2 < sweep.size(); i += 29) {  // between training frames (every 4th)
+    const scene::Pose pose = sweep[i + 2].pose;
+    const scene::RgbdSample gt = exact.Render(pose, train.camera, sweep[i + 2].stamp);
+    const scene::RgbdSample a = with_far.Render(pose), b = without.Render(pose);
+    const scene::RgbdSample f = filled.Render(pose), s = smear.Render(pose);
+    for (int v = 0; v < 64; ++v) {
+      for (int u = 0; u < 64; ++u) {
+        const bool observed = b.depth.at<float>(v, u) > 0.0f;
+        if (observed && a.rgb.at<cv::Vec3b>(v, u) != b.rgb.at<cv::Vec3b>(v, u)) ++changed_observed;
+        if (!observed && a.rgb.at<cv::Vec3b>(v, u) != cv::Vec3b(0, 0, 0)) ++far_px;
+        if (a.depth.at<float>(v, u) != b.depth.at<float>(v, u)) ++far_on_surface;
+        if (gt.depth.at<float>(v, u) <= 3.0f || observed) continue;
+        ++beyond_px;
+        for (int ch = 0; ch < 3; ++ch) {
+          const double t = gt.rgb.at<cv::Vec3b>(v, u)[ch];
+          sq_far += std::pow(f.rgb.at<cv::Vec3b>(v, u)[ch] - t, 2);
+          sq_smear += std::pow(s.rgb.at<cv::Vec3b>(v, u)[ch] - t, 2);
+        }
+      }
+    }
+  }
+  REQUIRE(beyond_px > 1000);
+  CHECK(far_px > beyond_px / 2);     // most of what lies beyond the range gets a far-field colour
+  CHECK(changed_observed == 0);      // the fused surface's pixels are untouched
+  CHECK(far_on_surface == 0);        // and no depth is invented
+  const double psnr_far = 10.0 * std::log10(255.0 * 255.0 * 3.0 * beyond_px / sq_far);
+  const double psnr_smear = 10.0 * std::log10(255.0 * 255.0 * 3.0 * beyond_px / sq_smear);
+  INFO("beyond the range: far field " << psnr_far << " dB, push-pull smear " << psnr_smear << " dB");
+  CHECK(psnr_far > psnr_smear + 3.0);
 }
 
 TEST_CASE("fusion: LastGeometry gives each view's observed fraction and keyframe angle, in batch order", "[unit]") {

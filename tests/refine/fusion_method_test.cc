@@ -132,8 +132,10 @@ TEST_CASE("fusion p2i_fill: P2I-NET's view fills the pixels the TSDF never obser
   d->camera = camera;
   for (size_t i = 0; i < 3; ++i) d->frames.push_back(sim.Render(poses[i * 6].pose, camera, poses[i * 6].stamp));
   in.training = d;
-  auto plain = Configure("{fill_holes: false}")(in);
-  auto filled = Configure("{fill_holes: false, p2i_fill: " + ckpt + "}")(in);
+  // The far field off: every pixel without a fused surface is the filler's (with it on, those
+  // whose keyframes saw nothing in range keep its colour: tests/fusion).
+  auto plain = Configure("{fill_holes: false, blend: {far_depth_m: 0}}")(in);
+  auto filled = Configure("{fill_holes: false, blend: {far_depth_m: 0}, p2i_fill: " + ckpt + "}")(in);
   // The first later pose whose view the three fused frames cover only in part.
   scene::Pose far;
   scene::RgbdSample a;
