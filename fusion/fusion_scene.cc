@@ -152,6 +152,24 @@ class KeyframeBlender {
   }
 
  private:
+  // A world point in a slot's keyframe: its depth there, its projection at the pyramid level read
+  // (the depth and colour levels have the same size) and the keyframe's own depth at it.
+  struct Projection {
+    float z, lu, lv, dk;
+  };
+  bool Project(const Slot& s, const Eigen::Vector3f& xw, Projection* p) const {
+    const Eigen::Vector3f xk = s.r_kw * xw + s.t_kw;
+    if (!(xk.z() > 1e-4f)) return false;
+    const float pu = kfx_ * xk.x() / xk.z() + kcx_, pv = kfy_ * xk.y() / xk.z() + kcy_;
+    if (!(pu >= 0.0f && pv >= 0.0f && pu <= kw_ - 1.0f && pv <= kh_ - 1.0f)) return false;
+    p->z = xk.z();
+    p->lu = pu;
+    p->lv = pv;
+    ToPyramidLevel(level_, s.depth->cols, s.depth->rows, &p->lu, &p->lv);
+    p->dk = s.depth->at<float>(static_cast<int>(p->lv + 0.5f), static_cast<int>(p->lu + 0.5f));
+    return true;
+  }
+
   // A pixel without a fused surface: the slots' colours of the point far_z_ along its ray, from
   // the slots that saw nothing nearer than 0.8 far_z_ at its projection, weighted by ray angle.
   void FarField(int u, int v, ViewCandidates* c) {
@@ -163,13 +181,9 @@ class KeyframeBlender {
     for (size_t j = 0; j < slots_.size(); ++j) {
       vis_[j] = false;
       const Slot& s = slots_[j];
-      const Eigen::Vector3f xk = s.r_kw * xw + s.t_kw;
-      if (!(xk.z() > 1e-4f)) continue;
-      const float pu = kfx_ * xk.x() / xk.z() + kcx_, pv = kfy_ * xk.y() / xk.z() + kcy_;
-      if (!(pu >= 0.0f && pv >= 0.0f && pu <= kw_ - 1.0f && pv <= kh_ - 1.0f)) continue;
-      float lu = pu, lv = pv;
-      ToPyramidLevel(level_, s.depth->cols, s.depth->rows, &lu, &lv);
-      const float dk = s.depth->at<float>(static_cast<int>(lv + 0.5f), static_cast<int>(lu + 0.5f));
+      Projection pr;
+      if (!Project(s, xw, &pr)) continue;
+      const float lu = pr.lu, lv = pr.lv, dk = pr.dk;
       if (dk > 0.0f && dk < 0.8f * far_z_) continue;  // it saw something nearer there
       const Eigen::Vector3f to_k = s.centre - xw;
       pen_[j] = AngleFromSinCos(dir.cross(to_k).norm(), -dir.dot(to_k));
@@ -201,15 +215,10 @@ class KeyframeBlender {
     for (size_t j = 0; j < slots_.size(); ++j) {
       vis_[j] = false;
       const Slot& s = slots_[j];
-      const Eigen::Vector3f xk = s.r_kw * xw + s.t_kw;
-      if (!(xk.z() > 1e-4f)) continue;
-      const float pu = kfx_ * xk.x() / xk.z() + kcx_, pv = kfy_ * xk.y() / xk.z() + kcy_;
-      if (!(pu >= 0.0f && pv >= 0.0f && pu <= kw_ - 1.0f && pv <= kh_ - 1.0f)) continue;
-      // The projection at the level read; the depth and colour levels have the same size.
-      float lu = pu, lv = pv;
-      ToPyramidLevel(level_, s.depth->cols, s.depth->rows, &lu, &lv);
-      const float dk = s.depth->at<float>(static_cast<int>(lv + 0.5f), static_cast<int>(lu + 0.5f));
-      if (!(dk > 0.0f) || std::fabs(dk - xk.z()) > std::max(vis_abs_, vis_rel_ * xk.z())) continue;
+      Projection pr;
+      if (!Project(s, xw, &pr)) continue;
+      const float lu = pr.lu, lv = pr.lv, dk = pr.dk;
+      if (!(dk > 0.0f) || std::fabs(dk - pr.z) > std::max(vis_abs_, vis_rel_ * pr.z)) continue;
       const Eigen::Vector3f to_k = s.centre - xw;  // point -> keyframe camera
       const float dist_k = to_k.norm();
       // The angle between the view's ray and the keyframe's (camera -> point, i.e. -to_k);
