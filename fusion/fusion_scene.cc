@@ -183,11 +183,11 @@ class KeyframeBlender {
       const Slot& s = slots_[j];
       Projection pr;
       if (!Project(s, xw, &pr)) continue;
-      const float lu = pr.lu, lv = pr.lv, dk = pr.dk;
-      if (dk > 0.0f && dk < 0.8f * far_z_) continue;  // it saw something nearer there
+      if (pr.dk > 0.0f && pr.dk < 0.8f * far_z_) continue;  // it saw something nearer there
       const Eigen::Vector3f to_k = s.centre - xw;
       pen_[j] = AngleFromSinCos(dir.cross(to_k).norm(), -dir.dot(to_k));
-      col_[j] = bicubic_ ? SampleBicubic(*s.colour, lu, lv) : SampleBilinear(*s.colour, lu, lv);
+      col_[j] = bicubic_ ? SampleBicubic(*s.colour, pr.lu, pr.lv)
+                         : SampleBilinear(*s.colour, pr.lu, pr.lv);
       vis_[j] = true;
       p_max = std::max(p_max, pen_[j]);
       ++n_vis;
