@@ -148,7 +148,7 @@ class KeyframeBlender {
       return;
     }
     ++stats->blended;
-    Mix(u, v, 1.5f * p_max + eps_, c, stats);
+    Mix(u, v, p_max, c, stats);
   }
 
  private:
@@ -193,13 +193,11 @@ class KeyframeBlender {
       ++n_vis;
     }
     if (n_vis == 0) return;
-    p_max = 1.5f * p_max + eps_;
     float wsum = 0.0f;
     cv::Vec3f out(0.0f, 0.0f, 0.0f);
     for (size_t j = 0; j < slots_.size(); ++j) {
       if (!vis_[j]) continue;
-      const float q = 1.0f - pen_[j] / p_max;
-      const float w = q * q / (pen_[j] + eps_);
+      const float w = Weight(pen_[j], p_max);
       wsum += w;
       out += w * col_[j];
     }
@@ -236,14 +234,20 @@ class KeyframeBlender {
     return n_vis;
   }
 
-  // The weights of the visible slots (penalties scaled by p_max), the blended colour and the
-  // confidence of the best-angle slot.
+  // The unstructured-lumigraph weight of a slot of penalty `pen` among visible slots whose
+  // largest penalty is `p_max`: it falls to 0 at 1.5 p_max, so the worst of them still counts.
+  float Weight(float pen, float p_max) const {
+    const float q = 1.0f - pen / (1.5f * p_max + eps_);
+    return q * q / (pen + eps_);
+  }
+
+  // The weights of the visible slots (Weight, times the grazing factor), the blended colour and
+  // the confidence of the best-angle slot.
   void Mix(int u, int v, float p_max, ViewCandidates* c, BlendStats* stats) {
     float wsum = 0.0f, a_min = 1e9f, g_best = 0.0f;
     for (size_t j = 0; j < slots_.size(); ++j) {
       if (!vis_[j]) continue;
-      const float q = 1.0f - pen_[j] / p_max;
-      wgt_[j] = q * q / (pen_[j] + eps_) * graze_[j];
+      wgt_[j] = Weight(pen_[j], p_max) * graze_[j];
       wsum += wgt_[j];
       if (ang_[j] < a_min) {
         a_min = ang_[j];

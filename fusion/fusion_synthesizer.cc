@@ -21,6 +21,16 @@ void CheckCamera(const scene::CameraInfo& c, const std::string& what) {
     throw std::invalid_argument(what + ": the camera needs a positive size and focal length");
 }
 
+/// Push-pull fills `v` where `known` is 0; pixels set in `far` keep their colour: it is the far
+/// field's, not the fill's.
+void FillKeepingFar(const cv::Mat& known, const cv::Mat& far, scene::RgbdSample* v) {
+  const bool any_far = !far.empty() && cv::countNonZero(far) > 0;
+  cv::Mat far_rgb;
+  if (any_far) v->rgb.copyTo(far_rgb);
+  model::PushPullFillRgbd(v->rgb, v->depth, known);
+  if (any_far) far_rgb.copyTo(v->rgb, far);
+}
+
 }  // namespace
 
 scene::RgbdSample ToView(const scene::Pose& pose, const cv::Mat& rgb, const cv::Mat& depth, bool fill,
@@ -30,12 +40,7 @@ scene::RgbdSample ToView(const scene::Pose& pose, const cv::Mat& rgb, const cv::
   v.id = id;
   rgb.convertTo(v.rgb, CV_8UC3, 255.0);
   v.depth = depth.clone();
-  if (!fill) return v;
-  const bool any_far = !far.empty() && cv::countNonZero(far) > 0;
-  cv::Mat far_rgb;
-  if (any_far) v.rgb.copyTo(far_rgb);
-  model::PushPullFillRgbd(v.rgb, v.depth, depth > 0.0f);
-  if (any_far) far_rgb.copyTo(v.rgb, far);  // their colour is the far field's, not the fill's
+  if (fill) FillKeepingFar(depth > 0.0f, far, &v);
   return v;
 }
 
@@ -123,12 +128,7 @@ scene::RgbdSample FusionSynthesizer::RenderAt(const scene::Pose& pose, const sce
     last_filler_fraction_ = FillFrom(*filler_, pose, camera, hole, &v) /
                             (static_cast<double>(camera.image_width) * camera.image_height);
   }
-  if (!refiner_ && options_.fill_holes) {
-    cv::Mat far_rgb;
-    v.rgb.copyTo(far_rgb);
-    model::PushPullFillRgbd(v.rgb, v.depth, v.depth > 0.0f);
-    far_rgb.copyTo(v.rgb, c.far);
-  }
+  if (!refiner_ && options_.fill_holes) FillKeepingFar(v.depth > 0.0f, c.far, &v);
   return v;
 }
 

@@ -22,9 +22,13 @@ void SimScenesOptions::Validate() const {
   if (!(pose_noise_m >= 0.0 && pose_noise_m <= 0.5) || !(pose_noise_deg >= 0.0 && pose_noise_deg <= 30.0))
     throw std::invalid_argument("SimScenesOptions: pose_noise_m must be in [0, 0.5] and "
                                 "pose_noise_deg in [0, 30]");
-  if (pixel_samples < 1 || pixel_samples > 7 || pixel_samples % 2 == 0)
-    throw std::invalid_argument("SimScenesOptions: pixel_samples must be odd, 1 to 7 (got " +
-                                std::to_string(pixel_samples) + ")");
+  scene::SimSensorOptions render;  // the sensor's own rule for the rays per pixel
+  render.pixel_samples = pixel_samples;
+  try {
+    render.Validate();
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string("SimScenesOptions: ") + e.what());
+  }
 }
 
 scene::Pose PerturbPose(const scene::Pose& pose, double sigma_m, double sigma_deg,
