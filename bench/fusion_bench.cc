@@ -305,6 +305,11 @@ int main(int argc, char** argv) {
                                {"submaps_10_render1", "{submaps: {frames: 10, render: 1}}"},
                                {"submaps_20", "{submaps: {frames: 20}}"},
                                {"submaps_20_render1", "{submaps: {frames: 20, render: 1}}"},
+                               {"align_1", "{blend: {align_iterations: 1}}"},
+                               {"align_1_fast", "{blend: {align_iterations: 1, align_flow_preset: fast}}"},
+                               {"align_1_ultrafast", "{blend: {align_iterations: 1, align_flow_preset: ultrafast}}"},
+                               {"align_2", "{blend: {align_iterations: 2}}"},
+                               {"submaps_20_align_1", "{submaps: {frames: 20}, blend: {align_iterations: 1}}"},
                                {"live_blend", "{}", true},
                                {"live_blend_full_res_reads", "{blend: {keyframe_levels: 0}}", true},
                                {"live_blend_bicubic", "{blend: {sampling: bicubic}}", true}};

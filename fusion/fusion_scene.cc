@@ -15,6 +15,7 @@
 #include "fusion/fast_angle.h"
 #include "fusion/keyframe_pyramid.h"
 #include "fusion/keyframe_sampling.h"
+#include "fusion/slot_alignment.h"
 #include "model/coverage.h"
 #include "scene/strict_yaml_reader.h"
 
@@ -292,7 +293,8 @@ BlendOptions BlendOptions::FromYaml(const YAML::Node& node, const std::string& s
   r.CheckKeys(node,
               {"k", "metres_per_degree", "visibility_abs_m", "visibility_rel", "resolution_weight",
                "penalty_epsilon", "grazing_floor", "angle_sigma_deg", "keyframe_min_distance",
-               "sampling", "keyframe_levels", "far_depth_m"},
+               "sampling", "keyframe_levels", "far_depth_m", "align_iterations",
+               "align_max_shift_px", "align_flow_preset"},
               "blend options");
   BlendOptions o;
   if (node["k"]) o.k = r.Int(node["k"], "k");
@@ -307,6 +309,9 @@ BlendOptions BlendOptions::FromYaml(const YAML::Node& node, const std::string& s
   r.OptionalDouble(node, "far_depth_m", "blend", &o.far_depth_m);
   if (node["sampling"]) o.sampling = r.String(node["sampling"], "sampling");
   if (node["keyframe_levels"]) o.keyframe_levels = r.Int(node["keyframe_levels"], "keyframe_levels");
+  if (node["align_iterations"]) o.align.iterations = r.Int(node["align_iterations"], "align_iterations");
+  r.OptionalDouble(node, "align_max_shift_px", "blend", &o.align.max_shift_px);
+  if (node["align_flow_preset"]) o.align.flow_preset = r.String(node["align_flow_preset"], "align_flow_preset");
   try {
     o.Validate();
   } catch (const std::invalid_argument& e) {
@@ -333,6 +338,15 @@ void BlendOptions::Validate() const {
     fail("keyframe_levels must be in [0, 6], got " + std::to_string(keyframe_levels));
   if (sampling != "auto" && sampling != "bicubic" && sampling != "bilinear")
     fail("sampling must be auto, bicubic or bilinear, got '" + sampling + "'");
+  if (align.iterations < 0 || align.iterations > 4)
+    fail("align_iterations must be in [0, 4] (0 = off), got " + std::to_string(align.iterations));
+  if (!(align.max_shift_px > 0.0 && align.max_shift_px <= 16.0))
+    fail("align_max_shift_px must be in (0, 16], got " + std::to_string(align.max_shift_px));
+  try {
+    DisPreset(align.flow_preset);
+  } catch (const std::invalid_argument& e) {
+    fail(e.what());
+  }
 }
 
 FusionSceneOptions FusionSceneOptions::FromYaml(const YAML::Node& node, const std::string& source) {
@@ -436,10 +450,11 @@ ViewCandidates FusionScene::RenderCandidates(const scene::Pose& pose, const scen
                                               options_.blend.metres_per_degree);
   std::vector<int> slot_keyframes;
   for (const Slot& s : slots) slot_keyframes.push_back(s.index);
-  ViewCandidates c =
-      EmptyCandidates(pose, camera, Surface(slot_keyframes, pose, camera), k, request.slot_planes);
+  const bool align = options_.blend.align.iterations > 0;  // aligning reads the slot planes
+  const bool planes = request.slot_planes || align;
+  ViewCandidates c = EmptyCandidates(pose, camera, Surface(slot_keyframes, pose, camera), k, planes);
   RecordSlots(slots, k, &c);
-  KeyframeBlender blender(pose, camera, frame_camera_, options_.blend, slots, level, request.slot_planes);
+  KeyframeBlender blender(pose, camera, frame_camera_, options_.blend, slots, level, planes);
   BlendStats stats;
   for (int v = 0; v < camera.image_height; ++v) {
     const float* drow = c.depth.ptr<float>(v);
@@ -452,6 +467,11 @@ ViewCandidates FusionScene::RenderCandidates(const scene::Pose& pose, const scen
   c.coverage.mean_angle_deg =
       stats.blended > 0 ? stats.angle_sum / static_cast<double>(stats.blended) : 0.0;
   c.coverage.score = stats.conf_sum / n;
+  if (align) AlignSlots(options_.blend.align, &c);
+  if (!request.slot_planes) {
+    for (cv::Mat& m : c.colours) m.release();
+    for (cv::Mat& m : c.weights) m.release();
+  }
   return c;
 }
 

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "fusion/slot_alignment.h"
 #include "fusion/submaps.h"
 #include "fusion/tsdf_volume.h"
 #include "fusion/view_candidates.h"
@@ -61,6 +62,9 @@ struct BlendOptions {
   /// stays 0 (no geometry), ViewCandidates::far marks them. 0 = off (they stay holes for the
   /// hole fill). Default: the TSDF's default depth_max_m.
   double far_depth_m = 5.0;
+  /// Floating textures (slot_alignment.h): YAML keys align_iterations (0 = off, the default),
+  /// align_max_shift_px and align_flow_preset.
+  SlotAlignmentOptions align;
   static BlendOptions FromYaml(const YAML::Node& node, const std::string& source);
   void Validate() const;
 };

@@ -1,0 +1,37 @@
+/// @file slot_alignment.h
+/// @brief Floating textures in their cheapest form (Eisemann et al., "Floating Textures",
+/// Eurographics 2008): each keyframe slot's colour map is moved by the optical flow from the
+/// blend to it, so that the slots' detail lines up before it is blended again. Pose and depth
+/// error put the same edge at slightly different pixels in each slot; blended as they are, the
+/// view shows the edge doubled or smeared.
+#pragma once
+
+#include <string>
+
+#include "fusion/view_candidates.h"
+
+namespace p2i::fusion {
+
+struct SlotAlignmentOptions {
+  /// Align-and-blend rounds (0 = off): each round aligns every slot to the previous round's blend.
+  int iterations = 0;
+  /// Flow vectors longer than this (pixels of the view) are shortened to it: slots further off
+  /// than that disagree about the surface, not about its detail.
+  double max_shift_px = 3.0;
+  /// The DIS preset: "ultrafast", "fast" or "medium" (the default: finest scale 1, with
+  /// variational refinement); slower presets track sub-pixel shifts more closely.
+  std::string flow_preset = "medium";
+};
+
+/// Aligns the slots of `c` to its blend and blends them again (`c->blended` and `c->colours`
+/// change; weights, depth and the far field do not). Needs the slot planes
+/// (CandidateRequest::slot_planes); a view without them, or options.iterations 0, is unchanged.
+/// The flow is OpenCV's DIS (flow_preset) on the luminance, computed where the slot is visible,
+/// the blend standing in for it elsewhere. Throws std::invalid_argument on an unknown preset.
+void AlignSlots(const SlotAlignmentOptions& options, ViewCandidates* c);
+
+/// OpenCV's cv::DISOpticalFlow preset of `name` (SlotAlignmentOptions::flow_preset); throws
+/// std::invalid_argument naming the choices otherwise.
+int DisPreset(const std::string& name);
+
+}  // namespace p2i::fusion
