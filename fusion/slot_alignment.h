@@ -18,9 +18,9 @@ struct SlotAlignmentOptions {
   /// Flow vectors longer than this (pixels of the view) are shortened to it: slots further off
   /// than that disagree about the surface, not about its detail.
   double max_shift_px = 3.0;
-  /// The DIS preset: "ultrafast", "fast" or "medium" (the default: finest scale 1, with
-  /// variational refinement); slower presets track sub-pixel shifts more closely.
-  std::string flow_preset = "medium";
+  /// The DIS preset: "ultrafast" (the default), "fast" or "medium". On study-room the slower
+  /// presets gained at most 0.04 dB for 2-5x the flow's time (docs/RESULTS.md "Floating textures").
+  std::string flow_preset = "ultrafast";
 };
 
 /// Aligns the slots of `c` to its blend and blends them again (`c->blended` and `c->colours`
