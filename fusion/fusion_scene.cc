@@ -128,6 +128,8 @@ class KeyframeBlender {
     floor_g_ = static_cast<float>(bo.grazing_floor);
     sigma_ = static_cast<float>(bo.angle_sigma_deg / kRadToDeg);
     far_z_ = static_cast<float>(bo.far_depth_m);
+    keyframe_depth_ = bo.depth == "keyframes";
+    view_z_ = r_wc_.col(2);
   }
 
   // Pixel (u, v) with raycast depth z and camera-frame normal n into c.
@@ -228,6 +230,10 @@ class KeyframeBlender {
       ang_[j] = a;
       graze_[j] = std::max(floor_g_, nw.dot(to_k) / dist_k);
       col_[j] = bicubic_ ? SampleBicubic(*s.colour, lu, lv) : SampleBilinear(*s.colour, lu, lv);
+      if (keyframe_depth_) {  // the keyframe's own surface point on its ray, as the view's z
+        const Eigen::Vector3f xs = s.centre + (xw - s.centre) * (dk / pr.z);
+        zk_[j] = (xs - centre_).dot(view_z_);
+      }
       vis_[j] = true;
       *p_max = std::max(*p_max, pen_[j]);
       ++n_vis;
@@ -256,9 +262,11 @@ class KeyframeBlender {
       }
     }
     cv::Vec3f out(0.0f, 0.0f, 0.0f);
+    float z = 0.0f;
     for (size_t j = 0; j < slots_.size(); ++j) {
       if (!vis_[j]) continue;
       const float a = wgt_[j] / wsum;
+      z += a * zk_[j];
       if (slot_planes_) {
         c->weights[j].at<float>(v, u) = a;
         c->colours[j].at<cv::Vec3f>(v, u) = col_[j];
@@ -266,6 +274,7 @@ class KeyframeBlender {
       out += a * col_[j];
     }
     c->blended.at<cv::Vec3f>(v, u) = out;
+    if (keyframe_depth_ && z > 0.0f) c->depth.at<float>(v, u) = z;
     const float conf = std::exp(-(a_min / sigma_) * (a_min / sigma_)) * g_best;
     c->confidence.at<float>(v, u) = conf;
     stats->angle_sum += a_min * kRadToDeg;
@@ -276,12 +285,13 @@ class KeyframeBlender {
   int level_;  // the keyframes' colour pyramid level read (Slot::colour)
   bool slot_planes_;  // write ViewCandidates::colours / weights (CandidateRequest::slot_planes)
   Eigen::Matrix3f r_wc_;
-  Eigen::Vector3f centre_;
+  Eigen::Vector3f centre_, view_z_;  // view_z_: the view's optical axis in the world
   float fx_, fy_, cx_, cy_, kfx_, kfy_, kcx_, kcy_;
   int kw_, kh_;
   float vis_abs_, vis_rel_, res_w_, eps_, floor_g_, sigma_, far_z_;
   bool bicubic_ = true;
-  std::array<float, 16> pen_{}, graze_{}, ang_{}, wgt_{};
+  bool keyframe_depth_ = false;  // BlendOptions::depth "keyframes"
+  std::array<float, 16> pen_{}, graze_{}, ang_{}, wgt_{}, zk_{};
   std::array<cv::Vec3f, 16> col_{};
   std::array<bool, 16> vis_{};
 };
@@ -294,7 +304,7 @@ BlendOptions BlendOptions::FromYaml(const YAML::Node& node, const std::string& s
               {"k", "metres_per_degree", "visibility_abs_m", "visibility_rel", "resolution_weight",
                "penalty_epsilon", "grazing_floor", "angle_sigma_deg", "keyframe_min_distance",
                "sampling", "keyframe_levels", "far_depth_m", "align_iterations",
-               "align_max_shift_px", "align_flow_preset"},
+               "align_max_shift_px", "align_flow_preset", "depth"},
               "blend options");
   BlendOptions o;
   if (node["k"]) o.k = r.Int(node["k"], "k");
@@ -308,6 +318,7 @@ BlendOptions BlendOptions::FromYaml(const YAML::Node& node, const std::string& s
   r.OptionalDouble(node, "keyframe_min_distance", "blend", &o.keyframe_min_distance);
   r.OptionalDouble(node, "far_depth_m", "blend", &o.far_depth_m);
   if (node["sampling"]) o.sampling = r.String(node["sampling"], "sampling");
+  if (node["depth"]) o.depth = r.String(node["depth"], "depth");
   if (node["keyframe_levels"]) o.keyframe_levels = r.Int(node["keyframe_levels"], "keyframe_levels");
   if (node["align_iterations"]) o.align.iterations = r.Int(node["align_iterations"], "align_iterations");
   r.OptionalDouble(node, "align_max_shift_px", "blend", &o.align.max_shift_px);
@@ -338,6 +349,8 @@ void BlendOptions::Validate() const {
     fail("keyframe_levels must be in [0, 6], got " + std::to_string(keyframe_levels));
   if (sampling != "auto" && sampling != "bicubic" && sampling != "bilinear")
     fail("sampling must be auto, bicubic or bilinear, got '" + sampling + "'");
+  if (depth != "raycast" && depth != "keyframes")
+    fail("depth must be raycast or keyframes, got '" + depth + "'");
   if (align.iterations < 0 || align.iterations > 4)
     fail("align_iterations must be in [0, 4] (0 = off), got " + std::to_string(align.iterations));
   if (!(align.max_shift_px > 0.0 && align.max_shift_px <= 16.0))

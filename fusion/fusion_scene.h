@@ -62,6 +62,11 @@ struct BlendOptions {
   /// stays 0 (no geometry), ViewCandidates::far marks them. 0 = off (they stay holes for the
   /// hole fill). Default: the TSDF's default depth_max_m.
   double far_depth_m = 5.0;
+  /// The view's depth where slots see its surface: "raycast" (the default: the TSDF's surface)
+  /// or "keyframes" (the blend-weighted depth of the slots' own depth maps there, each slot's
+  /// measured point on its own ray taken to the view's z, as depth warp's depth is; the raycast
+  /// stays where no slot sees the surface).
+  std::string depth = "raycast";
   /// Floating textures (slot_alignment.h): YAML keys align_iterations (0 = off, the default),
   /// align_max_shift_px and align_flow_preset.
   SlotAlignmentOptions align;

@@ -44,8 +44,9 @@ struct ViewCandidates {
   scene::Pose pose;          ///< the requested camera-to-world pose
   scene::CameraInfo camera;  ///< the requested output camera (any size and aspect)
 
-  /// CV_32FC1, z-depth along the optical axis in metres from the TSDF raycast; 0 = no surface
-  /// (the ray left the fused volume without a zero crossing: the TSDF never observed it).
+  /// CV_32FC1, z-depth along the optical axis in metres from the TSDF raycast (with
+  /// BlendOptions::depth "keyframes": the slots' own depths where they see the surface); 0 = no
+  /// surface (the ray left the fused volume without a zero crossing: the TSDF never observed it).
   cv::Mat depth;
   /// CV_32FC3, unit surface normals in the *camera* frame of `pose` (x right, y down, z forward;
   /// facing the camera: z < 0); (0, 0, 0) where depth is 0.

@@ -1,9 +1,12 @@
 /// @file fusion_scene_test.cc
 /// @brief FusionScene: keyframe blending with visibility, view-dependent weights, coverage, and
 /// the refinement tensor layout.
+#include <algorithm>
 #include <numeric>
+#include <vector>
 
 #include <catch2/catch.hpp>
+#include <yaml-cpp/yaml.h>
 
 #include "fusion/fusion_scene.h"
 #include "model/metrics.h"
@@ -176,6 +179,46 @@ TEST_CASE("FusionScene: keyframe_min_distance thins the keyframes, not the TSDF"
   CHECK(fs.AddFrame(scene.Render(At(0.1, 0, 0), cam)));
   CHECK(fs.keyframes().size() == 2);
   CHECK(fs.Stats().frames == 3);
+}
+
+// The median over observed pixels of a view's depth divided by the ground truth's.
+double MedianDepthRatio(const cv::Mat& depth, const cv::Mat& truth) {
+  std::vector<double> r;
+  for (int v = 0; v < depth.rows; ++v)
+    for (int u = 0; u < depth.cols; ++u)
+      if (depth.at<float>(v, u) > 0.0f && truth.at<float>(v, u) > 0.0f)
+        r.push_back(depth.at<float>(v, u) / truth.at<float>(v, u));
+  if (r.empty()) return 0.0;
+  std::nth_element(r.begin(), r.begin() + r.size() / 2, r.end());
+  return r[r.size() / 2];
+}
+
+TEST_CASE("FusionScene: blend depth keyframes reads the keyframes' own depth, raycast the TSDF's", "[unit]") {
+  const PlaneScene scene;
+  const auto cam = Cam(48, 36, 45);
+  // The TSDF holds the true surface; the keyframes (colour sources only) measured it 1.5 % deeper,
+  // inside the visibility test's 3 %, as a depth sensor's bias would.
+  FusionSceneOptions raycast, keyframes;
+  keyframes.blend.depth = "keyframes";
+  FusionScene a(cam, raycast), b(cam, keyframes);
+  for (double x : {-0.1, 0.0, 0.1}) {
+    const scene::RgbdSample truth = scene.Render(At(x, 0, 0), cam);
+    scene::RgbdSample biased = truth;
+    const cv::Mat deeper = truth.depth * 1.015;  // a new buffer: biased shares truth's
+    biased.depth = deeper;
+    for (FusionScene* fs : {&a, &b}) {
+      fs->Integrate(truth);
+      fs->AddFrame(biased, /*integrate=*/false);
+    }
+  }
+  const scene::RgbdSample gt = scene.Render(At(0.03, 0.01, 0), cam);
+  const ViewCandidates va = a.RenderCandidates(gt.pose, cam);
+  const ViewCandidates vb = b.RenderCandidates(gt.pose, cam);
+  CHECK(MedianDepthRatio(va.depth, gt.depth) == Approx(1.0).margin(0.004));
+  CHECK(MedianDepthRatio(vb.depth, gt.depth) == Approx(1.015).margin(0.004));
+  CHECK(cv::norm(va.blended, vb.blended, cv::NORM_INF) == 0.0);  // colour is the same either way
+  CHECK_THROWS_WITH(BlendOptions::FromYaml(YAML::Load("{depth: sensor}"), "cfg.yaml"),
+                    Catch::Contains("cfg.yaml") && Catch::Contains("raycast or keyframes"));
 }
 
 TEST_CASE("PackRefinementInput: channel layout of view_candidates.h", "[unit]") {
