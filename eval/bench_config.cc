@@ -11,6 +11,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "eval/sim_ceiling.h"
 #include "scene/strict_yaml_reader.h"
 
 namespace p2i::eval {
@@ -218,6 +219,23 @@ void ReadRunOptions(const Reader& r, const YAML::Node& root, BenchConfig& c) {
   if (root["strip_views"]) c.strip_views = Int(r, root["strip_views"], "strip_views", 0);
 }
 
+// ceiling: the kinds of sim ceiling rows (eval/sim_ceiling.h), sim scenes only.
+void ReadCeiling(const Reader& r, const YAML::Node& root, BenchConfig& c) {
+  const YAML::Node node = root["ceiling"];
+  if (!node) return;
+  if (!node.IsSequence()) r.Fail(node, "ceiling must be a list of kinds (" + CeilingKinds() + ")");
+  if (!c.dataset.IsSim() && node.size() > 0)
+    r.Fail(node, "ceiling needs a sim scene (dataset.scene): a captured dataset has no exact render "
+                 "to compare with; remove the key");
+  for (const auto& k : node) {
+    const std::string kind = r.String(k, "ceiling");
+    if (!IsCeilingKind(kind)) r.Fail(k, "ceiling kind '" + kind + "' is not one of " + CeilingKinds());
+    if (std::find(c.ceiling.begin(), c.ceiling.end(), kind) != c.ceiling.end())
+      r.Fail(k, "ceiling kind '" + kind + "' repeats");
+    c.ceiling.push_back(kind);
+  }
+}
+
 // methods: each a name of the method registry with its common, training and own keys.
 void ReadMethods(const Reader& r, const YAML::Node& root, const std::string& config_dir,
                  BenchConfig& c) {
@@ -388,7 +406,7 @@ BenchConfig BenchConfig::FromYamlString(const std::string& text, const std::stri
   r.CheckKeys(root,
               {"dataset", "settings", "period", "split_b", "split_c", "max_test_views", "methods",
                "sizes", "seeds", "threads", "lpips_weights", "strip_views", "stability",
-               "auto_size"},
+               "auto_size", "ceiling"},
               "the bench config");
   const std::string config_dir = fs::path(source).parent_path().string();
   ReadDataset(r, root, config_dir, c);
@@ -398,6 +416,7 @@ BenchConfig BenchConfig::FromYamlString(const std::string& text, const std::stri
   ReadMethods(r, root, config_dir, c);
   ReadStability(r, root, c);
   ReadAutoSize(r, root, c);
+  ReadCeiling(r, root, c);
   CheckReferences(r, root, c);
   // Build every learned model config now: a bad override stops the run at start-up.
   for (const auto& m : c.methods)

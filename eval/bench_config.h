@@ -116,6 +116,11 @@ struct BenchConfig {
   int strip_views = 4;        ///< poses per image strip in the report
   StabilitySpec stability;
   AutoSizeSpec auto_size;
+  /// Sim scenes only: ceiling rows (eval/sim_ceiling.h), each kind ("exact", "auto_exposure",
+  /// "colour") a row
+  /// `ceiling_KIND` at every setting and size: the scene's own render at the test poses, scored
+  /// as the methods are. Empty (the default) = none.
+  std::vector<std::string> ceiling;
 
   /// Strict: unknown keys, bad values and unknown presets throw std::runtime_error naming the
   /// file, the line and the key. Every learned (method, size) model config is built once here so

@@ -24,6 +24,7 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "eval/sim_ceiling.h"
 #include "eval/strips.h"
 #include "model/coverage.h"
 #include "model/method_registry.h"
@@ -409,8 +410,12 @@ struct SizeRuns {
 size_t CountRuns(const BenchConfig& c) {
   size_t total = 0;
   for (const auto& setting : c.settings)
-    for (const auto& size : c.sizes)
+    for (const auto& size : c.sizes) {
       for (const auto& m : c.methods) total += c.RunsOf(m, setting, size).size();
+      bool any = false;
+      for (const auto& m : c.methods) any = any || !c.RunsOf(m, setting, size).empty();
+      if (any) total += c.ceiling.size();  // ceiling rows where any method runs (sim only)
+    }
   return total;
 }
 
@@ -574,6 +579,27 @@ void MeasureRun(Measurement& ms, SizeRuns& sr, const MethodSpec& m, int seed, bo
   if (want_stab) StabilityStage(ms, sr, m, *synth);
 }
 
+// One ceiling row (eval/sim_ceiling.h) at a setting x size: the sim's own render at the test
+// poses, evaluated as a method is.
+void MeasureCeiling(Measurement& ms, const SizeRuns& sr, const std::string& kind) {
+  BenchRun& run = ms.run;
+  MethodSpec m;
+  m.name = "ceiling_" + kind;
+  m.type = "ceiling";
+  ResultRow row;
+  row.method = m.name;
+  row.method_type = m.type;
+  row.setting = sr.setting->Name();
+  row.size = sr.size->name;
+  row.resolution = sr.size->Width();
+  row.height = sr.size->Height();
+  row.seed = run.config.seeds.front();
+  row.train_frames = static_cast<int>(sr.train.frames.size());
+  if (run.store.Has(row.Key())) return;
+  SimCeilingView view(*ms.data.sim, kind, ms.data.index.camera(), sr.size->Width(), sr.size->Height(), sr.test);
+  EvaluateRow(ms, sr, m, view, &row);
+}
+
 // One setting: its split saved, then every size that runs on it (strips at the first one).
 void MeasureSetting(Measurement& ms, const scene::EvalSetting& setting, const scene::Split& split) {
   const BenchConfig& c = ms.run.config;
@@ -597,6 +623,11 @@ void MeasureSetting(Measurement& ms, const scene::EvalSetting& setting, const sc
         ++ms.done;
         MeasureRun(ms, sr, m, seed, seed == seeds.front());
       }
+    }
+    if (!ms.data.sim) continue;  // the config refuses `ceiling` without a sim scene
+    for (const auto& kind : c.ceiling) {
+      ++ms.done;
+      MeasureCeiling(ms, sr, kind);
     }
   }
 }
@@ -813,6 +844,15 @@ ReportInputs MakeReportInputs(const BenchRun& run) {
   ri.charts = run.charts;
   ri.strips = run.strips;
   ri.auto_size = run.auto_size;
+  if (!c.ceiling.empty())
+    ri.notes.push_back("`ceiling_*` rows are not methods: the sim's own render at each test pose (`exact`: "
+                       "pixel area only; `auto_exposure`: also the auto-exposure of the view's content; `colour`: "
+                       "also the test frame's exposure and white-balance drifts), "
+                       "scored against the test frames as the methods are. What separates "
+                       "`ceiling_colour` from the test frames (RGB noise, motion blur) no view made "
+                       "from a pose reproduces, nor the drifts (functions of time): `ceiling_colour` "
+                       "bounds every method of the run, `ceiling_auto_exposure` every method that "
+                       "cannot know the capture's time (eval/sim_ceiling.h).");
   for (const auto& m : c.methods) {
     if (!m.IsLearned()) continue;
     const auto mc = c.ModelConfig(m, c.sizes.front(), c.SeedsOf(m).front());
