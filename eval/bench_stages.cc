@@ -552,10 +552,8 @@ void StabilityStage(Measurement& ms, SizeRuns& sr, const MethodSpec& m,
   SaveStability(run.out_dir, run.stability);
 }
 
-// One method x seed at a setting x size: what an earlier run left undone of its row, strip views
-// and stability sweep.
-void MeasureRun(Measurement& ms, SizeRuns& sr, const MethodSpec& m, int seed, bool first_seed) {
-  BenchRun& run = ms.run;
+// The key fields of a row of `m` at the setting x size of `sr`.
+ResultRow RowOf(const SizeRuns& sr, const MethodSpec& m, int seed) {
   ResultRow row;
   row.method = m.name;
   row.method_type = m.type;
@@ -565,6 +563,14 @@ void MeasureRun(Measurement& ms, SizeRuns& sr, const MethodSpec& m, int seed, bo
   row.height = sr.size->Height();
   row.seed = seed;
   row.train_frames = static_cast<int>(sr.train.frames.size());
+  return row;
+}
+
+// One method x seed at a setting x size: what an earlier run left undone of its row, strip views
+// and stability sweep.
+void MeasureRun(Measurement& ms, SizeRuns& sr, const MethodSpec& m, int seed, bool first_seed) {
+  BenchRun& run = ms.run;
+  ResultRow row = RowOf(sr, m, seed);
   const bool have_row = run.store.Has(row.Key());
   const bool want_strip =
       sr.strip_size && first_seed && !fs::exists(sr.strip_dir + "/" + m.name + "/0_rgb.png");
@@ -586,15 +592,7 @@ void MeasureCeiling(Measurement& ms, const SizeRuns& sr, const std::string& kind
   MethodSpec m;
   m.name = "ceiling_" + kind;
   m.type = "ceiling";
-  ResultRow row;
-  row.method = m.name;
-  row.method_type = m.type;
-  row.setting = sr.setting->Name();
-  row.size = sr.size->name;
-  row.resolution = sr.size->Width();
-  row.height = sr.size->Height();
-  row.seed = run.config.seeds.front();
-  row.train_frames = static_cast<int>(sr.train.frames.size());
+  ResultRow row = RowOf(sr, m, run.config.seeds.front());
   if (run.store.Has(row.Key())) return;
   SimCeilingView view(*ms.data.sim, kind, ms.data.index.camera(), sr.size->Width(), sr.size->Height(), sr.test);
   EvaluateRow(ms, sr, m, view, &row);
