@@ -3,7 +3,8 @@
 /// time per camera frame (against a 30 Hz camera's 33.3 ms) with blocks of 16^3 (the default) and
 /// 8^3 voxels, render time per view at 128x128 and 320x240 with the default surface (the TSDF's
 /// mesh, bicubic keyframe reads), with bilinear reads, with the raycast (hit refinement on and
-/// off), with 8^3 blocks and with the learned
+/// off), with 8^3 blocks, with submaps and alignment, study_room.yaml's configuration for real
+/// poses (row fusion_real) and with the learned
 /// refinement, and the fused scene's memory per m^3 of
 /// allocated blocks. The method is built through the method registry,
 /// as `p2i bench` and the synthesizer build it; transport is not included (pipeline_bench has
@@ -310,6 +311,8 @@ int main(int argc, char** argv) {
                                {"align_1_ultrafast", "{blend: {align_iterations: 1, align_flow_preset: ultrafast}}"},
                                {"align_2", "{blend: {align_iterations: 2}}"},
                                {"submaps_20_align_1", "{submaps: {frames: 20}, blend: {align_iterations: 1}}"},
+                               // study_room.yaml's fusion_real: the configuration for real poses
+                               {"fusion_real", "{submaps: {frames: 20}, blend: {align_iterations: 1, depth: keyframes}}"},
                                {"live_blend", "{}", true},
                                {"live_blend_full_res_reads", "{blend: {keyframe_levels: 0}}", true},
                                {"live_blend_bicubic", "{blend: {sampling: bicubic}}", true}};

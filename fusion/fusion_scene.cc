@@ -11,6 +11,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <Eigen/Geometry>
+#include <opencv2/imgproc.hpp>
 
 #include "fusion/fast_angle.h"
 #include "fusion/keyframe_pyramid.h"
@@ -61,6 +62,7 @@ ViewCandidates EmptyCandidates(const scene::Pose& pose, const scene::CameraInfo&
 // Keyframe slots for a view: nearest by pose, nearest first, minus an excluded one; each reads
 // colour at pyramid `level` (0: the keyframe itself).
 std::vector<Slot> SelectSlots(const std::vector<scene::RgbdSample>& keyframes,
+                              const std::vector<cv::Mat>& blend_rgb,
                               const std::vector<std::vector<cv::Mat>>& colour_levels,
                               const std::vector<std::vector<cv::Mat>>& depth_levels,
                               const std::vector<scene::Pose>& poses, const scene::Pose& pose,
@@ -74,7 +76,7 @@ std::vector<Slot> SelectSlots(const std::vector<scene::RgbdSample>& keyframes,
     Slot s;
     s.index = static_cast<int>(i);
     s.frame = &keyframes[i];
-    s.colour = level == 0 ? &keyframes[i].rgb : &colour_levels[i][static_cast<size_t>(level - 1)];
+    s.colour = level == 0 ? &blend_rgb[i] : &colour_levels[i][static_cast<size_t>(level - 1)];
     s.depth = level == 0 ? &keyframes[i].depth : &depth_levels[i][static_cast<size_t>(level - 1)];
     const Eigen::Matrix4d kw = keyframes[i].pose.Inverse().ToMatrix();
     s.r_kw = kw.block<3, 3>(0, 0).cast<float>();
@@ -266,7 +268,7 @@ class KeyframeBlender {
     for (size_t j = 0; j < slots_.size(); ++j) {
       if (!vis_[j]) continue;
       const float a = wgt_[j] / wsum;
-      z += a * zk_[j];
+      if (keyframe_depth_) z += a * zk_[j];
       if (slot_planes_) {
         c->weights[j].at<float>(v, u) = a;
         c->colours[j].at<cv::Vec3f>(v, u) = col_[j];
@@ -304,7 +306,7 @@ BlendOptions BlendOptions::FromYaml(const YAML::Node& node, const std::string& s
               {"k", "metres_per_degree", "visibility_abs_m", "visibility_rel", "resolution_weight",
                "penalty_epsilon", "grazing_floor", "angle_sigma_deg", "keyframe_min_distance",
                "sampling", "keyframe_levels", "far_depth_m", "align_iterations",
-               "align_max_shift_px", "align_flow_preset", "depth"},
+               "align_max_shift_px", "align_flow_preset", "depth", "keyframe_denoise"},
               "blend options");
   BlendOptions o;
   if (node["k"]) o.k = r.Int(node["k"], "k");
@@ -317,6 +319,7 @@ BlendOptions BlendOptions::FromYaml(const YAML::Node& node, const std::string& s
   r.OptionalDouble(node, "angle_sigma_deg", "blend", &o.angle_sigma_deg);
   r.OptionalDouble(node, "keyframe_min_distance", "blend", &o.keyframe_min_distance);
   r.OptionalDouble(node, "far_depth_m", "blend", &o.far_depth_m);
+  r.OptionalDouble(node, "keyframe_denoise", "blend", &o.keyframe_denoise);
   if (node["sampling"]) o.sampling = r.String(node["sampling"], "sampling");
   if (node["depth"]) o.depth = r.String(node["depth"], "depth");
   if (node["keyframe_levels"]) o.keyframe_levels = r.Int(node["keyframe_levels"], "keyframe_levels");
@@ -345,6 +348,8 @@ void BlendOptions::Validate() const {
     fail("keyframe_min_distance must be >= 0");
   if (!(far_depth_m >= 0.0) || !std::isfinite(far_depth_m))
     fail("far_depth_m must be >= 0 (0 = off), got " + std::to_string(far_depth_m));
+  if (!(keyframe_denoise >= 0.0 && keyframe_denoise <= 64.0))
+    fail("keyframe_denoise must be in [0, 64] grey levels (0 = off), got " + std::to_string(keyframe_denoise));
   if (keyframe_levels < 0 || keyframe_levels > 6)
     fail("keyframe_levels must be in [0, 6], got " + std::to_string(keyframe_levels));
   if (sampling != "auto" && sampling != "bicubic" && sampling != "bilinear")
@@ -435,7 +440,13 @@ bool FusionScene::AddFrame(const scene::RgbdSample& frame, bool integrate) {
   kf.id = frame.id;
   kf.rgb = frame.rgb.clone();
   kf.depth = frame.depth.clone();
-  colour_levels_.push_back(ColourPyramid(kf.rgb, options_.blend.keyframe_levels));
+  cv::Mat read;  // a new buffer when smoothed (the filter cannot work in place), else kf.rgb's
+  if (options_.blend.keyframe_denoise > 0.0)
+    cv::bilateralFilter(kf.rgb, read, 5, options_.blend.keyframe_denoise, 1.0, cv::BORDER_REPLICATE);
+  else
+    read = kf.rgb;
+  blend_rgb_.push_back(read);
+  colour_levels_.push_back(ColourPyramid(read, options_.blend.keyframe_levels));
   depth_levels_.push_back(DepthPyramid(kf.depth, options_.blend.keyframe_levels));
   keyframes_.push_back(std::move(kf));
   poses_.push_back(frame.pose);
@@ -459,8 +470,8 @@ ViewCandidates FusionScene::RenderCandidates(const scene::Pose& pose, const scen
   const int built = colour_levels_.empty() ? 0 : static_cast<int>(colour_levels_.front().size());
   const int level = PyramidLevelFor(camera.fx(), camera.fy(), frame_camera_.fx(), frame_camera_.fy(),
                                     std::min(built, options_.blend.keyframe_levels));
-  const std::vector<Slot> slots = SelectSlots(keyframes_, colour_levels_, depth_levels_, poses_, pose, k, level, request,
-                                              options_.blend.metres_per_degree);
+  const std::vector<Slot> slots = SelectSlots(keyframes_, blend_rgb_, colour_levels_, depth_levels_, poses_, pose, k,
+                                              level, request, options_.blend.metres_per_degree);
   std::vector<int> slot_keyframes;
   for (const Slot& s : slots) slot_keyframes.push_back(s.index);
   const bool align = options_.blend.align.iterations > 0;  // aligning reads the slot planes

@@ -67,6 +67,13 @@ struct BlendOptions {
   /// measured point on its own ray taken to the view's z, as depth warp's depth is; the raycast
   /// stays where no slot sees the surface).
   std::string depth = "raycast";
+  /// Edge-preserving smoothing of each keyframe's colour before the blend reads it: a 5x5
+  /// bilateral filter (spatial sigma 1 px) whose colour sigma is this many 8-bit grey levels
+  /// (0 = off, the default; about 3x the camera's RGB noise sigma). The blend weights its best
+  /// slot most, so a view keeps much of one keyframe's sensor noise, which the test frame's own
+  /// noise does not cancel: on flat surfaces SSIM's structure term pays for both. The keyframes
+  /// themselves (keyframes(), the refinement's training targets) stay as captured.
+  double keyframe_denoise = 0.0;
   /// Floating textures (slot_alignment.h): YAML keys align_iterations (0 = off, the default),
   /// align_max_shift_px and align_flow_preset.
   SlotAlignmentOptions align;
@@ -148,6 +155,9 @@ class FusionScene {
   std::optional<SubmapSet> submaps_;
   std::vector<int> keyframe_submap_;
   std::vector<scene::RgbdSample> keyframes_;
+  /// The colour each keyframe's slot reads at level 0: its rgb, or the smoothed copy
+  /// (BlendOptions::keyframe_denoise).
+  std::vector<cv::Mat> blend_rgb_;
   /// Levels 1.. of each keyframe's colour pyramid (BlendOptions::keyframe_levels).
   std::vector<std::vector<cv::Mat>> colour_levels_;
   /// Levels 1.. of each keyframe's depth pyramid (DepthPyramid), read by the visibility test.

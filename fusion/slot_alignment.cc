@@ -68,9 +68,17 @@ int DisPreset(const std::string& name) {
 
 void AlignSlots(const SlotAlignmentOptions& options, ViewCandidates* c) {
   if (options.iterations <= 0 || c->colours.empty() || c->blended.empty()) return;
-  cv::Ptr<cv::DISOpticalFlow> dis = cv::DISOpticalFlow::create(DisPreset(options.flow_preset));
+  // One flow object and one set of buffers per thread and preset, kept between views (as
+  // SurfaceMesh::Rasterize keeps its View): DIS allocates its pyramids at the first size it sees.
+  thread_local int preset = -1;
+  thread_local cv::Ptr<cv::DISOpticalFlow> dis;
+  thread_local cv::Mat flow, map_x, map_y, source, moved;
+  const int wanted = DisPreset(options.flow_preset);
+  if (dis.empty() || preset != wanted) {
+    dis = cv::DISOpticalFlow::create(wanted);
+    preset = wanted;
+  }
   const float max_px = static_cast<float>(options.max_shift_px);
-  cv::Mat flow, map_x, map_y, source, moved;
   for (int it = 0; it < options.iterations; ++it) {
     const cv::Mat reference = Luminance8(c->blended);
     std::vector<cv::Mat> aligned(c->colours.size());

@@ -221,6 +221,43 @@ TEST_CASE("FusionScene: blend depth keyframes reads the keyframes' own depth, ra
                     Catch::Contains("cfg.yaml") && Catch::Contains("raycast or keyframes"));
 }
 
+TEST_CASE("FusionScene: keyframe_denoise smooths the colour the blend reads, not the keyframes kept", "[unit]") {
+  const PlaneScene scene;
+  const auto cam = Cam(64, 48, 55);
+  FusionSceneOptions smoothed;
+  smoothed.blend.keyframe_denoise = 24.0;
+  FusionScene plain(cam), denoised(cam, smoothed);
+  cv::RNG rng(7);
+  std::vector<cv::Mat> noisy_rgb;
+  for (double x : {-0.1, 0.0, 0.1}) {
+    scene::RgbdSample f = scene.Render(At(x, 0, 0), cam);
+    cv::Mat noise(f.rgb.size(), CV_16SC3), rgb16;
+    rng.fill(noise, cv::RNG::NORMAL, 0.0, 4.0);  // a camera's RGB noise, 4 grey levels
+    f.rgb.convertTo(rgb16, CV_16SC3);
+    cv::Mat noisy = rgb16 + noise;
+    noisy.convertTo(f.rgb, CV_8UC3);  // saturates
+    noisy_rgb.push_back(f.rgb.clone());
+    plain.AddFrame(f);
+    denoised.AddFrame(f);
+  }
+  const scene::RgbdSample gt = scene.Render(At(0.0, 0, 0), cam);  // clean, at a keyframe's pose
+  const ViewCandidates vp = plain.RenderCandidates(gt.pose, cam);
+  const ViewCandidates vd = denoised.RenderCandidates(gt.pose, cam);
+  cv::Mat bp = To8U(vp.blended), bd = To8U(vd.blended);
+  gt.rgb.copyTo(bp, vp.observed == 0);  // score the observed pixels only
+  gt.rgb.copyTo(bd, vp.observed == 0);
+  const double psnr_plain = model::Psnr(bp, gt.rgb);
+  const double psnr_denoised = model::Psnr(bd, gt.rgb);
+  INFO("PSNR against the clean frame: plain " << psnr_plain << ", denoised " << psnr_denoised);
+  CHECK(psnr_denoised > psnr_plain + 2.0);
+  // The keyframes stay as captured (the refinement trains on them).
+  REQUIRE(denoised.keyframes().size() == noisy_rgb.size());
+  for (size_t i = 0; i < noisy_rgb.size(); ++i)
+    CHECK(cv::norm(denoised.keyframes()[i].rgb, noisy_rgb[i], cv::NORM_INF) == 0.0);
+  CHECK_THROWS_WITH(BlendOptions::FromYaml(YAML::Load("{keyframe_denoise: -1}"), "cfg.yaml"),
+                    Catch::Contains("cfg.yaml") && Catch::Contains("keyframe_denoise"));
+}
+
 TEST_CASE("PackRefinementInput: channel layout of view_candidates.h", "[unit]") {
   const PlaneScene scene;
   const auto cam = Cam(20, 16, 18);
