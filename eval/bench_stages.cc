@@ -407,22 +407,20 @@ struct SizeRuns {
   std::optional<std::vector<StabilitySample>> stability_samples;  // made at first use
 };
 
+bool AnyRunAt(const BenchConfig& c, const scene::EvalSetting& setting, const SizeSpec& size) {
+  bool any_run = false;
+  for (const auto& m : c.methods) any_run = any_run || !c.RunsOf(m, setting, size).empty();
+  return any_run;
+}
+
 size_t CountRuns(const BenchConfig& c) {
   size_t total = 0;
   for (const auto& setting : c.settings)
     for (const auto& size : c.sizes) {
       for (const auto& m : c.methods) total += c.RunsOf(m, setting, size).size();
-      bool any = false;
-      for (const auto& m : c.methods) any = any || !c.RunsOf(m, setting, size).empty();
-      if (any) total += c.ceiling.size();  // ceiling rows where any method runs (sim only)
+      if (AnyRunAt(c, setting, size)) total += c.ceiling.size();  // ceiling rows (sim only)
     }
   return total;
-}
-
-bool AnyRunAt(const BenchConfig& c, const scene::EvalSetting& setting, const SizeSpec& size) {
-  bool any_run = false;
-  for (const auto& m : c.methods) any_run = any_run || !c.RunsOf(m, setting, size).empty();
-  return any_run;
 }
 
 // The frames, coverage scorer, strip and stability plan of one setting x size; saves the ground
