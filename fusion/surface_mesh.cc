@@ -22,12 +22,41 @@ int64_t ChunkKey(const Eigen::Vector3f& p, float chunk_m) {
   return (c(p.x()) << 42) | (c(p.y()) << 21) | c(p.z());
 }
 
+constexpr int kClusterTriangles = 64;
+
+/// Position along a Morton (Z-order) curve of a point with coordinates in [0, 1]^3, 10 bits each:
+/// sorting by it keeps neighbours in space near each other in the order.
+uint32_t MortonCode(const Eigen::Vector3f& unit) {
+  const auto spread = [](float x) {
+    uint32_t v = static_cast<uint32_t>(std::min(std::max(x, 0.0f), 1.0f) * 1023.0f);
+    v = (v | (v << 16)) & 0x030000FFu;
+    v = (v | (v << 8)) & 0x0300F00Fu;
+    v = (v | (v << 4)) & 0x030C30C3u;
+    v = (v | (v << 2)) & 0x09249249u;
+    return v;
+  };
+  return (spread(unit.x()) << 2) | (spread(unit.y()) << 1) | spread(unit.z());
+}
+
+/// Bounding sphere (centre of the box, half its diagonal) of points.
+template <typename Points>
+void BoundingSphere(const Points& points, Eigen::Vector3f* centre, float* radius) {
+  Eigen::Vector3f lo = points.front(), hi = lo;
+  for (const Eigen::Vector3f& p : points) {
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  *centre = 0.5f * (lo + hi);
+  *radius = 0.5f * (hi - lo).norm();
+}
+
 }  // namespace
 
-/// A vertex in one view: screen position (pixels) and depth (not in the anonymous namespace:
+/// A vertex in one view: screen position (pixels), depth and its inverse (not in the anonymous namespace:
 /// SurfaceMesh::View, a member type, holds them).
 struct ViewVertex {
   float x, y, z;
+  float iz;  ///< 1 / z where z > 0, else 0
 };
 
 SurfaceMesh::SurfaceMesh(const std::vector<Eigen::Vector3f>& positions,
@@ -67,10 +96,12 @@ SurfaceMesh::SurfaceMesh(const std::vector<Eigen::Vector3f>& positions,
   }
   winding_ = agree >= 0.0 ? 1.0f : -1.0f;
 
-  // Each chunk's own vertices (a vertex shared by chunks is copied into each).
+  // Each chunk's own vertices (a vertex shared by chunks is copied into each), its triangles in
+  // Morton order of their centroids, cut into clusters.
   std::vector<int32_t> seen_in(nv, -1), local_index(nv, 0);
   chunks_.reserve(members.size());
   for (size_t ci = 0; ci < members.size(); ++ci) {
+    SortAlongCurve(positions, triangles, &members[ci]);
     Chunk ch;
     ch.vertex_begin = static_cast<int64_t>(pos_.size());
     ch.triangle_begin = static_cast<int64_t>(tri_.size() / 3);
@@ -88,18 +119,54 @@ SurfaceMesh::SurfaceMesh(const std::vector<Eigen::Vector3f>& positions,
     }
     ch.vertex_end = static_cast<int64_t>(pos_.size());
     ch.triangle_end = static_cast<int64_t>(tri_.size() / 3);
-    Eigen::Vector3f lo = pos_[ch.vertex_begin], hi = lo;
-    for (int64_t v = ch.vertex_begin; v < ch.vertex_end; ++v) {
-      lo = lo.cwiseMin(pos_[v]);
-      hi = hi.cwiseMax(pos_[v]);
-    }
-    ch.centre = 0.5f * (lo + hi);
-    ch.radius = 0.5f * (hi - lo).norm();
+    BoundingSphere(std::vector<Eigen::Vector3f>(pos_.begin() + ch.vertex_begin, pos_.begin() + ch.vertex_end),
+                   &ch.centre, &ch.radius);
+    AddClusters(&ch);
     chunks_.push_back(ch);
   }
 }
 
-/// One view: the camera, the chunks it can see with their vertices in it, the z-buffer.
+void SurfaceMesh::SortAlongCurve(const std::vector<Eigen::Vector3f>& positions,
+                                 const std::vector<int64_t>& triangles, std::vector<int64_t>* members) {
+  std::vector<Eigen::Vector3f> centroid;
+  centroid.reserve(members->size());
+  for (int64_t t : *members)
+    centroid.push_back((positions[triangles[3 * t]] + positions[triangles[3 * t + 1]] +
+                        positions[triangles[3 * t + 2]]) / 3.0f);
+  Eigen::Vector3f lo = centroid.front(), hi = lo;
+  for (const Eigen::Vector3f& c : centroid) {
+    lo = lo.cwiseMin(c);
+    hi = hi.cwiseMax(c);
+  }
+  const float extent = std::max((hi - lo).maxCoeff(), 1e-6f);  // one scale: keeps the cells cubic
+  std::vector<std::pair<uint32_t, int64_t>> keyed;
+  keyed.reserve(members->size());
+  for (size_t i = 0; i < members->size(); ++i)
+    keyed.emplace_back(MortonCode((centroid[i] - lo) / extent), (*members)[i]);
+  std::stable_sort(keyed.begin(), keyed.end(),
+                   [](const auto& x, const auto& y) { return x.first < y.first; });
+  for (size_t i = 0; i < keyed.size(); ++i) (*members)[i] = keyed[i].second;
+}
+
+void SurfaceMesh::AddClusters(Chunk* ch) {
+  ch->cluster_begin = static_cast<int64_t>(clusters_.size());
+  const int64_t n = ch->triangle_end - ch->triangle_begin;
+  std::vector<Eigen::Vector3f> points;
+  for (int64_t begin = 0; begin < n; begin += kClusterTriangles) {
+    Cluster cl;
+    cl.begin = static_cast<int32_t>(begin);
+    cl.end = static_cast<int32_t>(std::min<int64_t>(n, begin + kClusterTriangles));
+    points.clear();
+    for (int64_t k = 3 * (ch->triangle_begin + cl.begin); k < 3 * (ch->triangle_begin + cl.end); ++k)
+      points.push_back(pos_[static_cast<size_t>(ch->vertex_begin + tri_[static_cast<size_t>(k)])]);
+    BoundingSphere(points, &cl.centre, &cl.radius);
+    clusters_.push_back(cl);
+  }
+  ch->cluster_end = static_cast<int64_t>(clusters_.size());
+}
+
+/// One view: the camera, the chunks it can see with their vertices in it, the z-buffer and the
+/// maps it writes.
 struct SurfaceMesh::View {
   Eigen::Matrix3f r;  // world -> camera
   Eigen::Vector3f t;
@@ -109,9 +176,21 @@ struct SurfaceMesh::View {
   std::vector<int64_t> offset;   // chunk -> its first vertex in `verts` (-1 = not visible)
   std::vector<ViewVertex> verts;
   std::vector<float> zbuf;       // nearest front-face depth per pixel
-  std::vector<int64_t> id;       // its triangle: chunk << 32 | triangle in chunk; -1 = none
+  float* depth = nullptr;        // the output maps (continuous, w x h): written per pixel whenever
+  cv::Vec3f* normals = nullptr;  // a nearer front face is found there
+  cv::Vec3f* colour = nullptr;
   const uint8_t* only = nullptr;  // pixels to draw (non-zero), row stride w; null = all
   cv::Mat only_sum;              // integral image of `only` != 0 (CV_32S, (h + 1) x (w + 1))
+
+  /// Whether a sphere (world frame) can reach into the view and over a pixel to draw.
+  bool MayDraw(const Eigen::Vector3f& world_centre, float radius) const {
+    const Eigen::Vector3f centre = r * world_centre + t;
+    if (!SphereMayBeInView(centre, radius, depth_min, depth_max, fx, fy, cx, cy, w, h)) return false;
+    if (only == nullptr) return true;
+    int u0, u1, v0, v1;
+    SphereScreenBox(centre, radius, fx, fy, cx, cy, w, h, &u0, &u1, &v0, &v1);
+    return AnyToDraw(u0, u1, v0, v1);
+  }
 
   /// Whether the box [u0, u1] x [v0, v1] (inside the image) holds a pixel to draw.
   bool AnyToDraw(int u0, int u1, int v0, int v1) const {
@@ -154,9 +233,11 @@ void SurfaceMesh::Rasterize(const scene::Pose& pose, const scene::CameraInfo& ca
   view.cx = static_cast<float>(camera.cx()), view.cy = static_cast<float>(camera.cy());
   view.depth_min = depth_min, view.depth_max = depth_max;
   view.w = w, view.h = h;
+  view.depth = out->depth.ptr<float>(0);
+  view.normals = out->normals.ptr<cv::Vec3f>(0);
+  view.colour = out->colour.ptr<cv::Vec3f>(0);
   CullAndTransform(&view);
   DrawFrontFaces(&view);
-  Resolve(view, out);
 }
 
 // Chunks whose bounding sphere can reach into the frustum, their vertices in the view.
@@ -165,100 +246,111 @@ void SurfaceMesh::CullAndTransform(View* view) const {
   v.offset.assign(chunks_.size(), -1);
   for (size_t ci = 0; ci < chunks_.size(); ++ci) {
     const Chunk& ch = chunks_[ci];
-    const Eigen::Vector3f centre = v.r * ch.centre + v.t;
-    if (!SphereMayBeInView(centre, ch.radius, v.depth_min, v.depth_max, v.fx, v.fy, v.cx, v.cy, v.w, v.h))
-      continue;
-    if (v.only != nullptr) {
-      int u0, u1, v0, v1;
-      SphereScreenBox(centre, ch.radius, v.fx, v.fy, v.cx, v.cy, v.w, v.h, &u0, &u1, &v0, &v1);
-      if (!v.AnyToDraw(u0, u1, v0, v1)) continue;
-    }
+    if (!v.MayDraw(ch.centre, ch.radius)) continue;
     v.offset[ci] = static_cast<int64_t>(v.verts.size());
     v.visible.push_back(static_cast<int32_t>(ci));
     for (int64_t i = ch.vertex_begin; i < ch.vertex_end; ++i) {
       const Eigen::Vector3f p = v.r * pos_[i] + v.t;
       const float iz = p.z() > 0.0f ? 1.0f / p.z() : 0.0f;
-      v.verts.push_back({v.fx * p.x() * iz + v.cx, v.fy * p.y() * iz + v.cy, p.z()});
+      v.verts.push_back({v.fx * p.x() * iz + v.cx, v.fy * p.y() * iz + v.cy, p.z(), iz});
     }
   }
 }
 
-// Z-buffer of front faces: the nearest triangle at each pixel centre.
+namespace {
+
+/// ceil(x) for x in [0, INT_MAX): the conversion truncates towards zero, which is floor there.
+inline int CeilNonNegative(float x) {
+  const int t = static_cast<int>(x);
+  return t + (static_cast<float>(t) < x ? 1 : 0);
+}
+
+}  // namespace
+
+// Z-buffer of front faces: the nearest triangle at each pixel centre, cluster by cluster of the
+// visible chunks.
 void SurfaceMesh::DrawFrontFaces(View* view) const {
   View& vw = *view;
   const int w = vw.w, h = vw.h;
   vw.zbuf.assign(static_cast<size_t>(w) * h, std::numeric_limits<float>::infinity());
-  vw.id.assign(static_cast<size_t>(w) * h, -1);
   for (int32_t ci : vw.visible) {
     const Chunk& ch = chunks_[static_cast<size_t>(ci)];
     const ViewVertex* vv = vw.verts.data() + vw.offset[static_cast<size_t>(ci)];
-    for (int64_t tr = ch.triangle_begin; tr < ch.triangle_end; ++tr) {
-      const ViewVertex& a = vv[tri_[3 * tr]];
-      const ViewVertex& b = vv[tri_[3 * tr + 1]];
-      const ViewVertex& c = vv[tri_[3 * tr + 2]];
-      if (a.z < vw.depth_min || b.z < vw.depth_min || c.z < vw.depth_min) continue;
-      const float area = (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
-      // Front faces have winding_ * area < 0 (see the header of winding_): the normal's side.
-      if (!(winding_ * area < 0.0f)) continue;
-      const int u0 = std::max(0, static_cast<int>(std::ceil(std::min({a.x, b.x, c.x}))));
-      const int u1 = std::min(w - 1, static_cast<int>(std::floor(std::max({a.x, b.x, c.x}))));
-      if (u0 > u1) continue;
-      const int v0 = std::max(0, static_cast<int>(std::ceil(std::min({a.y, b.y, c.y}))));
-      const int v1 = std::min(h - 1, static_cast<int>(std::floor(std::max({a.y, b.y, c.y}))));
-      if (v0 > v1) continue;
-      if (!vw.AnyToDraw(u0, u1, v0, v1)) continue;
-      const float s = area > 0.0f ? 1.0f : -1.0f, inv_area = 1.0f / std::fabs(area);
-      const float iza = 1.0f / a.z, izb = 1.0f / b.z, izc = 1.0f / c.z;
-      const int64_t tag = (static_cast<int64_t>(ci) << 32) | (tr - ch.triangle_begin);
-      for (int v = v0; v <= v1; ++v) {
-        const float py = static_cast<float>(v);
-        for (int u = u0; u <= u1; ++u) {
-          const float px = static_cast<float>(u);
-          // Edge functions, non-negative inside (inclusive: a pixel on a shared edge is tested
-          // by both triangles, so no crack opens between them).
-          const float e0 = s * ((c.x - b.x) * (py - b.y) - (c.y - b.y) * (px - b.x));
-          const float e1 = s * ((a.x - c.x) * (py - c.y) - (a.y - c.y) * (px - c.x));
-          const float e2 = s * ((b.x - a.x) * (py - a.y) - (b.y - a.y) * (px - a.x));
-          if (e0 < 0.0f || e1 < 0.0f || e2 < 0.0f) continue;
-          const float iz = (e0 * iza + e1 * izb + e2 * izc) * inv_area;
-          if (!(iz > 0.0f)) continue;
-          const float z = 1.0f / iz;
-          const size_t i = static_cast<size_t>(v) * w + u;
-          if (vw.only != nullptr && vw.only[i] == 0) continue;
-          if (z < vw.zbuf[i] && z <= vw.depth_max) {
-            vw.zbuf[i] = z;
-            vw.id[i] = tag;
-          }
-        }
-      }
-    }
+    for (int64_t cl = ch.cluster_begin; cl < ch.cluster_end; ++cl)
+      if (vw.MayDraw(clusters_[static_cast<size_t>(cl)].centre, clusters_[static_cast<size_t>(cl)].radius))
+        DrawCluster(ch, clusters_[static_cast<size_t>(cl)], vv, view);
   }
 }
 
-// Perspective-correct barycentrics of each pixel's triangle give its normal and colour.
-void SurfaceMesh::Resolve(const View& vw, TsdfRaycast* out) const {
-  for (int v = 0; v < vw.h; ++v) {
-    float* drow = out->depth.ptr<float>(v);
-    cv::Vec3f* nrow = out->normals.ptr<cv::Vec3f>(v);
-    cv::Vec3f* crow = out->colour.ptr<cv::Vec3f>(v);
-    for (int u = 0; u < vw.w; ++u) {
+// One cluster's triangles: most of them cover no pixel centre or lie outside the image at the
+// resolutions views are asked for, so the loop rejects by pixel box first, before any other test.
+void SurfaceMesh::DrawCluster(const Chunk& ch, const Cluster& cl, const ViewVertex* vv, View* view) const {
+  View& vw = *view;
+  const int w = vw.w;
+  const float u_max = static_cast<float>(w - 1), v_max = static_cast<float>(vw.h - 1);
+  const int32_t* t = tri_.data() + 3 * (ch.triangle_begin + cl.begin);
+  for (int64_t k = cl.begin; k < cl.end; ++k, t += 3) {
+    const ViewVertex& a = vv[t[0]];
+    const ViewVertex& b = vv[t[1]];
+    const ViewVertex& c = vv[t[2]];
+    // Pixel box: ceil of the smallest coordinate to floor of the largest, inside the image
+    // (written so a NaN coordinate rejects the triangle).
+    const float x0 = std::max(std::min(std::min(a.x, b.x), c.x), 0.0f);
+    const float x1 = std::min(std::max(std::max(a.x, b.x), c.x), u_max);
+    if (!(x0 <= x1)) continue;
+    const int u0 = CeilNonNegative(x0), u1 = static_cast<int>(x1);
+    if (u0 > u1) continue;
+    const float y0 = std::max(std::min(std::min(a.y, b.y), c.y), 0.0f);
+    const float y1 = std::min(std::max(std::max(a.y, b.y), c.y), v_max);
+    if (!(y0 <= y1)) continue;
+    const int v0 = CeilNonNegative(y0), v1 = static_cast<int>(y1);
+    if (v0 > v1) continue;
+    if (a.z < vw.depth_min || b.z < vw.depth_min || c.z < vw.depth_min) continue;
+    const float area = (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
+    // Front faces have winding_ * area < 0 (see the header of winding_): the normal's side.
+    if (!(winding_ * area < 0.0f)) continue;
+    if (!vw.AnyToDraw(u0, u1, v0, v1)) continue;
+    DrawTriangle(ch.vertex_begin, t, vv, area, u0, u1, v0, v1, view);
+  }
+}
+
+// The pixel centres of one front face, [u0, u1] x [v0, v1] its pixel box (inside the image): where
+// it is nearer than what the z-buffer holds, its depth, and normal and colour by
+// perspective-correct barycentrics (forward shading: the triangle's vertices are in cache now, not
+// when a later pass would look them up per pixel). Edge functions are non-negative inside
+// (inclusive: a pixel on a shared edge is tested by both triangles, so no crack opens between
+// them). Out of line: the triangle loop around it rejects most triangles and stays in registers.
+__attribute__((noinline)) void SurfaceMesh::DrawTriangle(int64_t vertex_begin, const int32_t* t,
+                                                         const ViewVertex* vv, float area, int u0, int u1,
+                                                         int v0, int v1, View* view) const {
+  View& vw = *view;
+  const ViewVertex &a = vv[t[0]], &b = vv[t[1]], &c = vv[t[2]];
+  const Shading &sa = shade_[static_cast<size_t>(vertex_begin + t[0])];
+  const Shading &sb = shade_[static_cast<size_t>(vertex_begin + t[1])];
+  const Shading &sc = shade_[static_cast<size_t>(vertex_begin + t[2])];
+  const float s = area > 0.0f ? 1.0f : -1.0f, inv_area = 1.0f / std::fabs(area);
+  for (int v = v0; v <= v1; ++v) {
+    const float py = static_cast<float>(v);
+    for (int u = u0; u <= u1; ++u) {
+      const float px = static_cast<float>(u);
+      const float e0 = s * ((c.x - b.x) * (py - b.y) - (c.y - b.y) * (px - b.x));
+      const float e1 = s * ((a.x - c.x) * (py - c.y) - (a.y - c.y) * (px - c.x));
+      const float e2 = s * ((b.x - a.x) * (py - a.y) - (b.y - a.y) * (px - a.x));
+      if (e0 < 0.0f || e1 < 0.0f || e2 < 0.0f) continue;
+      const float iz = (e0 * a.iz + e1 * b.iz + e2 * c.iz) * inv_area;
+      if (!(iz > 0.0f)) continue;
+      const float z = 1.0f / iz;
       const size_t i = static_cast<size_t>(v) * vw.w + u;
-      if (vw.id[i] < 0) continue;
-      const size_t ci = static_cast<size_t>(vw.id[i] >> 32);
-      const Chunk& ch = chunks_[ci];
-      const int64_t tr = ch.triangle_begin + (vw.id[i] & 0xffffffff);
-      const ViewVertex* vv = vw.verts.data() + vw.offset[ci];
-      const int32_t ia = tri_[3 * tr], ib = tri_[3 * tr + 1], ic = tri_[3 * tr + 2];
-      const ViewVertex &a = vv[ia], &b = vv[ib], &c = vv[ic];
-      const float px = static_cast<float>(u), py = static_cast<float>(v);
-      const float e0 = std::fabs((c.x - b.x) * (py - b.y) - (c.y - b.y) * (px - b.x));
-      const float e1 = std::fabs((a.x - c.x) * (py - c.y) - (a.y - c.y) * (px - c.x));
-      const float e2 = std::fabs((b.x - a.x) * (py - a.y) - (b.y - a.y) * (px - a.x));
+      if (vw.only != nullptr && vw.only[i] == 0) continue;
+      if (!(z < vw.zbuf[i] && z <= vw.depth_max)) continue;
+      vw.zbuf[i] = z;
+      // The nearest face decides the pixel: where its shading is degenerate the pixel is empty.
+      vw.depth[i] = 0.0f;
+      vw.normals[i] = cv::Vec3f(0.0f, 0.0f, 0.0f);
+      vw.colour[i] = cv::Vec3f(0.0f, 0.0f, 0.0f);
       const float q0 = e0 / a.z, q1 = e1 / b.z, q2 = e2 / c.z, q = q0 + q1 + q2;
       if (!(q > 0.0f)) continue;
       const float b0 = q0 / q, b1 = q1 / q, b2 = q2 / q;
-      const int64_t va = ch.vertex_begin + ia, vb = ch.vertex_begin + ib, vc = ch.vertex_begin + ic;
-      const Shading &sa = shade_[va], &sb = shade_[vb], &sc = shade_[vc];
       Eigen::Vector3f n = vw.r * (b0 * sa.nrm + b1 * sb.nrm + b2 * sc.nrm);
       const float len = n.norm();
       if (!(len > 1e-6f)) continue;
@@ -266,9 +358,9 @@ void SurfaceMesh::Resolve(const View& vw, TsdfRaycast* out) const {
       const Eigen::Vector3f ray((px - vw.cx) / vw.fx, (py - vw.cy) / vw.fy, 1.0f);
       if (n.dot(ray) > 0.0f) n = -n;
       const Eigen::Vector3f col = (b0 * sa.col + b1 * sb.col + b2 * sc.col).cwiseMax(0.0f).cwiseMin(1.0f);
-      drow[u] = vw.zbuf[i];
-      nrow[u] = cv::Vec3f(n.x(), n.y(), n.z());
-      crow[u] = cv::Vec3f(col.x(), col.y(), col.z());
+      vw.depth[i] = z;
+      vw.normals[i] = cv::Vec3f(n.x(), n.y(), n.z());
+      vw.colour[i] = cv::Vec3f(col.x(), col.y(), col.z());
     }
   }
 }

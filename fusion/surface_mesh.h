@@ -22,9 +22,14 @@
 
 namespace p2i::fusion {
 
+struct ViewVertex;  // a vertex projected into one view (surface_mesh.cc)
+
 /// A triangle mesh in world coordinates, grouped into cubic chunks (each with its own vertices,
 /// duplicated where triangles of two chunks share one) so a view transforms and rasterises only
-/// the chunks its frustum can see.
+/// the chunks its frustum can see. Within a chunk, triangles are ordered along a space-filling
+/// curve and cut into clusters of up to 64 neighbouring triangles, each with a bounding sphere: a
+/// view skips the clusters outside its frustum (or over no pixel it must draw) without testing
+/// their triangles one by one.
 class SurfaceMesh {
  public:
   /// `positions`, `normals` (unit, pointing to free space: the TSDF's positive side) and `colours`
@@ -51,17 +56,34 @@ class SurfaceMesh {
 
  private:
   struct View;  // one Rasterize call's camera, visible chunks and buffers (surface_mesh.cc)
+  struct Chunk;
+  struct Cluster;
+  /// Orders one chunk's triangles (indices into `triangles`) along a Morton curve of their centroids.
+  static void SortAlongCurve(const std::vector<Eigen::Vector3f>& positions, const std::vector<int64_t>& triangles,
+                             std::vector<int64_t>* members);
+  void AddClusters(Chunk* ch);  ///< cuts the chunk's triangles (already in tri_) into clusters
   void CullAndTransform(View* view) const;
   void DrawFrontFaces(View* view) const;
-  void Resolve(const View& view, TsdfRaycast* out) const;
+  void DrawCluster(const Chunk& ch, const Cluster& cl, const ViewVertex* vv, View* view) const;
+  void DrawTriangle(int64_t vertex_begin, const int32_t* t, const ViewVertex* vv, float area, int u0, int u1,
+                    int v0, int v1, View* view) const;
 
   struct Chunk {
     Eigen::Vector3f centre;
     float radius = 0.0f;           ///< bounding sphere of its vertices
     int64_t vertex_begin = 0, vertex_end = 0;      ///< into pos_ / shade_
     int64_t triangle_begin = 0, triangle_end = 0;  ///< into tri_ (local vertex indices per chunk)
+    int64_t cluster_begin = 0, cluster_end = 0;    ///< into clusters_
+  };
+  /// Consecutive triangles of one chunk, [begin, end) relative to its triangle_begin, and the
+  /// bounding sphere of their vertices.
+  struct Cluster {
+    Eigen::Vector3f centre;
+    float radius = 0.0f;
+    int32_t begin = 0, end = 0;
   };
   std::vector<Chunk> chunks_;
+  std::vector<Cluster> clusters_;
   std::vector<Eigen::Vector3f> pos_;  ///< read per vertex of a visible chunk (CullAndTransform)
   /// Normal and colour of each vertex side by side: Resolve reads both for 3 vertices per pixel,
   /// from one cache line each rather than two.
