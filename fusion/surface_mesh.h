@@ -85,7 +85,7 @@ class SurfaceMesh {
   std::vector<Chunk> chunks_;
   std::vector<Cluster> clusters_;
   std::vector<Eigen::Vector3f> pos_;  ///< read per vertex of a visible chunk (CullAndTransform)
-  /// Normal and colour of each vertex side by side: Resolve reads both for 3 vertices per pixel,
+  /// Normal and colour of each vertex side by side: DrawTriangle reads both for its 3 vertices,
   /// from one cache line each rather than two.
   struct Shading {
     Eigen::Vector3f nrm, col;
