@@ -38,14 +38,21 @@ uint32_t MortonCode(const Eigen::Vector3f& unit) {
   return (spread(unit.x()) << 2) | (spread(unit.y()) << 1) | spread(unit.z());
 }
 
-/// Bounding sphere (centre of the box, half its diagonal) of points.
-template <typename Points>
-void BoundingSphere(const Points& points, Eigen::Vector3f* centre, float* radius) {
-  Eigen::Vector3f lo = points.front(), hi = lo;
-  for (const Eigen::Vector3f& p : points) {
-    lo = lo.cwiseMin(p);
-    hi = hi.cwiseMax(p);
+/// Axis-aligned box of the points [begin, end) (not empty).
+template <typename It>
+void BoxOf(It begin, It end, Eigen::Vector3f* lo, Eigen::Vector3f* hi) {
+  *lo = *hi = *begin;
+  for (It p = begin; p != end; ++p) {
+    *lo = lo->cwiseMin(*p);
+    *hi = hi->cwiseMax(*p);
   }
+}
+
+/// Bounding sphere (centre of the box, half its diagonal) of the points [begin, end).
+template <typename It>
+void BoundingSphere(It begin, It end, Eigen::Vector3f* centre, float* radius) {
+  Eigen::Vector3f lo, hi;
+  BoxOf(begin, end, &lo, &hi);
   *centre = 0.5f * (lo + hi);
   *radius = 0.5f * (hi - lo).norm();
 }
@@ -119,8 +126,7 @@ SurfaceMesh::SurfaceMesh(const std::vector<Eigen::Vector3f>& positions,
     }
     ch.vertex_end = static_cast<int64_t>(pos_.size());
     ch.triangle_end = static_cast<int64_t>(tri_.size() / 3);
-    BoundingSphere(std::vector<Eigen::Vector3f>(pos_.begin() + ch.vertex_begin, pos_.begin() + ch.vertex_end),
-                   &ch.centre, &ch.radius);
+    BoundingSphere(pos_.begin() + ch.vertex_begin, pos_.begin() + ch.vertex_end, &ch.centre, &ch.radius);
     AddClusters(&ch);
     chunks_.push_back(ch);
   }
@@ -133,11 +139,8 @@ void SurfaceMesh::SortAlongCurve(const std::vector<Eigen::Vector3f>& positions,
   for (int64_t t : *members)
     centroid.push_back((positions[triangles[3 * t]] + positions[triangles[3 * t + 1]] +
                         positions[triangles[3 * t + 2]]) / 3.0f);
-  Eigen::Vector3f lo = centroid.front(), hi = lo;
-  for (const Eigen::Vector3f& c : centroid) {
-    lo = lo.cwiseMin(c);
-    hi = hi.cwiseMax(c);
-  }
+  Eigen::Vector3f lo, hi;
+  BoxOf(centroid.begin(), centroid.end(), &lo, &hi);
   const float extent = std::max((hi - lo).maxCoeff(), 1e-6f);  // one scale: keeps the cells cubic
   std::vector<std::pair<uint32_t, int64_t>> keyed;
   keyed.reserve(members->size());
@@ -159,7 +162,7 @@ void SurfaceMesh::AddClusters(Chunk* ch) {
     points.clear();
     for (int64_t k = 3 * (ch->triangle_begin + cl.begin); k < 3 * (ch->triangle_begin + cl.end); ++k)
       points.push_back(pos_[static_cast<size_t>(ch->vertex_begin + tri_[static_cast<size_t>(k)])]);
-    BoundingSphere(points, &cl.centre, &cl.radius);
+    BoundingSphere(points.begin(), points.end(), &cl.centre, &cl.radius);
     clusters_.push_back(cl);
   }
   ch->cluster_end = static_cast<int64_t>(clusters_.size());
@@ -276,9 +279,10 @@ void SurfaceMesh::DrawFrontFaces(View* view) const {
   for (int32_t ci : vw.visible) {
     const Chunk& ch = chunks_[static_cast<size_t>(ci)];
     const ViewVertex* vv = vw.verts.data() + vw.offset[static_cast<size_t>(ci)];
-    for (int64_t cl = ch.cluster_begin; cl < ch.cluster_end; ++cl)
-      if (vw.MayDraw(clusters_[static_cast<size_t>(cl)].centre, clusters_[static_cast<size_t>(cl)].radius))
-        DrawCluster(ch, clusters_[static_cast<size_t>(cl)], vv, view);
+    for (int64_t i = ch.cluster_begin; i < ch.cluster_end; ++i) {
+      const Cluster& cl = clusters_[static_cast<size_t>(i)];
+      if (vw.MayDraw(cl.centre, cl.radius)) DrawCluster(ch, cl, vv, view);
+    }
   }
 }
 
