@@ -27,6 +27,7 @@
 #include "eval/sim_ceiling.h"
 #include "eval/strips.h"
 #include "model/coverage.h"
+#include "model/densify.h"
 #include "model/method_registry.h"
 #include "model/metrics.h"
 #include "model/pose_dependence.h"
@@ -465,16 +466,21 @@ void TrainLearned(Measurement& ms, const SizeRuns& sr, const MethodSpec& m, int 
                 row->train_frames, sr.size->resolution, sr.size->resolution, seed,
                 mc.steps_phase1, mc.IsBaseline() || !mc.enet ? 0 : mc.steps_phase2);
   std::fflush(stdout);
+  model::DensifyReport dr;
+  const scene::RgbdDataset train = model::DensifyTrainingFrames(sr.train, mc, &dr);
+  if (dr.added > 0 && !quiet)
+    std::printf("  densified: %d views of %s near the training poses (%.1f s)\n", dr.added,
+                mc.densify_method.c_str(), dr.render_s);
   model::TrainReport tr;
   try {
-    tr = model::Trainer(mc, to).Run(sr.train, scene::RgbdDataset{sr.train.camera, {}});
+    tr = model::Trainer(mc, to).Run(train, scene::RgbdDataset{sr.train.camera, {}});
   } catch (const std::exception& e) {
     if (!to.resume) throw;
     std::fprintf(stderr, "resume of %s failed (%s): training from scratch\n", run_dir.c_str(),
                  e.what());
     fs::remove_all(run_dir);
     to.resume = false;
-    tr = model::Trainer(mc, to).Run(sr.train, scene::RgbdDataset{sr.train.camera, {}});
+    tr = model::Trainer(mc, to).Run(train, scene::RgbdDataset{sr.train.camera, {}});
   }
   row->train_s = Since(t0);
   if (tr.stopped && !quiet)

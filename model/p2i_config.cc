@@ -72,6 +72,10 @@ void P2iConfig::Validate() const {
   if (fourier_bands < 1 || fourier_bands > 16) fail("fourier_bands must be in [1, 16]");
   if (!(recon_weight >= 0)) fail("recon_weight must be >= 0 (0 = off)");
   if (!(r1_gamma >= 0)) fail("r1_gamma must be >= 0 (0 = off)");
+  if (!(densify_ratio >= 0 && densify_ratio <= 100)) fail("densify_ratio must be in [0, 100] (0 = off)");
+  if (!(densify_offset_m >= 0 && densify_offset_m <= 10)) fail("densify_offset_m must be in [0, 10] metres");
+  if (!(densify_angle_deg >= 0 && densify_angle_deg <= 90)) fail("densify_angle_deg must be in [0, 90] degrees");
+  if (densify_method.empty()) fail("densify_method must name a method (e.g. fusion or warp)");
   if (steps_phase1 < 0 || steps_phase2 < 0) fail("steps_phase1/2 must be >= 0");
   if (!(lr_g > 0 && lr_d > 0 && lr_enet > 0)) fail("learning rates must be > 0");
   if (lr_decay_steps < 0) fail("lr_decay_steps must be >= 0 (0 = constant learning rates)");
@@ -107,6 +111,10 @@ P2iConfig P2iConfig::FromYamlString(const std::string& text, const std::string& 
       {"fourier_bands", [&](const YAML::Node& n) { c.fourier_bands = n.as<int>(); }},
       {"recon_weight", [&](const YAML::Node& n) { c.recon_weight = n.as<double>(); }},
       {"r1_gamma", [&](const YAML::Node& n) { c.r1_gamma = n.as<double>(); }},
+      {"densify_ratio", [&](const YAML::Node& n) { c.densify_ratio = n.as<double>(); }},
+      {"densify_offset_m", [&](const YAML::Node& n) { c.densify_offset_m = n.as<double>(); }},
+      {"densify_angle_deg", [&](const YAML::Node& n) { c.densify_angle_deg = n.as<double>(); }},
+      {"densify_method", [&](const YAML::Node& n) { c.densify_method = n.as<std::string>(); }},
       {"d_base_width", [&](const YAML::Node& n) { c.d_base_width = n.as<int>(); }},
       {"d_max_width", [&](const YAML::Node& n) { c.d_max_width = n.as<int>(); }},
       {"latent_dim", [&](const YAML::Node& n) { c.latent_dim = n.as<int>(); }},
@@ -182,6 +190,10 @@ std::string P2iConfig::ToYamlString() const {
   e << YAML::Key << "fourier_bands" << YAML::Value << fourier_bands;
   e << YAML::Key << "recon_weight" << YAML::Value << recon_weight;
   e << YAML::Key << "r1_gamma" << YAML::Value << r1_gamma;
+  e << YAML::Key << "densify_ratio" << YAML::Value << densify_ratio;
+  e << YAML::Key << "densify_offset_m" << YAML::Value << densify_offset_m;
+  e << YAML::Key << "densify_angle_deg" << YAML::Value << densify_angle_deg;
+  e << YAML::Key << "densify_method" << YAML::Value << densify_method;
   e << YAML::Key << "d_base_width" << YAML::Value << d_base_width;
   e << YAML::Key << "d_max_width" << YAML::Value << d_max_width;
   e << YAML::Key << "latent_dim" << YAML::Value << latent_dim;

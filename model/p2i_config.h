@@ -64,6 +64,19 @@ struct P2iConfig {
   /// (Mescheder et al. 2018), added to L_D. Not in the paper: 0 = off.
   double r1_gamma = 0.0;
 
+  // --- training data ---
+  /// Geometry-densified training (not in the paper: 0 = off in every preset). Before training,
+  /// `p2i bench` and `p2i train` add round(densify_ratio x training frames) views rendered by
+  /// `densify_method` (a method of model/method_registry.h built over the training frames, e.g.
+  /// "fusion" or "warp") at poses near the trajectory: a random training pose moved up to
+  /// densify_offset_m in a random direction and turned up to densify_angle_deg about a random
+  /// axis (model/densify.h). G then sees targets off the captured path, where the training frames
+  /// alone leave it to interpolate. The trainer node does not densify (docs/MODEL.md).
+  double densify_ratio = 0.0;
+  double densify_offset_m = 0.15;
+  double densify_angle_deg = 10.0;
+  std::string densify_method = "fusion";
+
   // --- optimisation ---
   int batch_size = 16;
   int d_steps = 1;               ///< D updates per G update (each on its own batch)

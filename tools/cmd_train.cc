@@ -8,6 +8,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "model/densify.h"
 #include "model/p2i_config.h"
 #include "model/pose_dependence.h"
 #include "model/procedural_dataset.h"
@@ -168,8 +169,13 @@ int RunTrain(const std::vector<std::string>& args) {
   }
   const model::P2iConfig config = model::P2iConfig::FromYamlFile(config_path);
   const TrainVal data_split = LoadTrainVal(config, data, split_file, frames, holdout_every);
-  return Train(config, data_split.train, data_split.val, out_dir, phase, steps, threads, resume,
-               quiet, init_from);
+  model::DensifyReport dr;
+  const scene::RgbdDataset train = model::DensifyTrainingFrames(data_split.train, config, &dr);
+  if (dr.added > 0)
+    std::fprintf(stderr, "densified: %d views of %s near the training poses (%.1f s)\n",
+                 dr.added, config.densify_method.c_str(), dr.render_s);
+  return Train(config, train, data_split.val, out_dir, phase, steps, threads, resume, quiet,
+               init_from);
 }
 
 P2I_COMMAND("train", "Train P2I-NET or the CNN baseline from a config preset", RunTrain);

@@ -50,6 +50,9 @@ void TrainerNode::StartTraining(TrainerNodeOptions& options, const std::string& 
     }
   }
   config.Validate();
+  if (config.densify_ratio > 0)
+    Log().warn("densify_ratio {} in the model config is not used online: the trainer node trains "
+               "on the frames it receives (p2i train and p2i bench densify)", config.densify_ratio);
 
   ReplayBuffer::Options& b = options.buffer;
   b.dir = work_dir + "/buffer";

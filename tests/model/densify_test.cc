@@ -1,0 +1,166 @@
+/// @file densify_test.cc
+/// @brief Geometry-densified training frames (model/densify.h): nearby poses stay within their
+/// bounds, the added views are the named method's renders at those poses, deterministic, and bad
+/// settings are errors that name them.
+#include "model/densify.h"
+
+#include <set>
+#include <stdexcept>
+
+#include <catch2/catch.hpp>
+#include <opencv2/core.hpp>
+
+#include "model/baseline_warp.h"
+#include "model/metrics.h"
+#include "scene/sim_scene.h"
+#include "scene/trajectory.h"
+
+namespace p2i::model {
+namespace {
+
+scene::RgbdDataset SmallOffice(int step) {
+  const scene::SimScene sim = scene::SimScene::BuiltIn("small_office");
+  scene::RgbdDataset data;
+  data.camera = scene::SimScene::DefaultCamera(32, 32);
+  const auto sweep = scene::GenerateArmSweep({});
+  for (size_t i = 0; i < sweep.size(); i += static_cast<size_t>(step)) {
+    scene::RgbdSample f = sim.Render(sweep[i].pose, data.camera);
+    f.id = "seq-01/" + std::to_string(i);
+    data.frames.push_back(std::move(f));
+  }
+  return data;
+}
+
+P2iConfig DensifyWarp(double ratio, double offset_m, double angle_deg) {
+  P2iConfig c;
+  c.densify_ratio = ratio;
+  c.densify_offset_m = offset_m;
+  c.densify_angle_deg = angle_deg;
+  c.densify_method = "warp";
+  return c;
+}
+
+bool SameImage(const cv::Mat& a, const cv::Mat& b) {
+  return a.size() == b.size() && a.type() == b.type() && cv::norm(a, b, cv::NORM_INF) == 0.0;
+}
+
+TEST_CASE("NearbyPose moves and turns a pose within its bounds, and uses them", "[unit]") {
+  std::mt19937_64 rng(7);
+  const scene::Pose base(Eigen::Vector3d(1.0, 2.0, 0.5),
+                         Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitY())));
+  double max_t = 0.0, max_r = 0.0;
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (int i = 0; i < 2000; ++i) {
+    const scene::Pose p = NearbyPose(base, 0.2, 12.0, rng);
+    const double t = scene::Pose::TranslationDistance(p, base);
+    const double r = scene::Pose::RotationDistanceDeg(p, base);
+    REQUIRE(t <= 0.2 + 1e-9);
+    REQUIRE(r <= 12.0 + 1e-6);
+    max_t = std::max(max_t, t);
+    max_r = std::max(max_r, r);
+    mean += p.translation() - base.translation();
+  }
+  CHECK(max_t > 0.19);  // the bound is reached, not a fraction of it
+  CHECK(max_r > 11.5);
+  CHECK((mean / 2000.0).norm() < 0.02);  // no preferred direction
+  std::mt19937_64 still(1);
+  const scene::Pose same = NearbyPose(base, 0.0, 0.0, still);
+  CHECK(scene::Pose::TranslationDistance(same, base) < 1e-12);
+  CHECK(scene::Pose::RotationDistanceDeg(same, base) < 1e-6);
+}
+
+TEST_CASE("DensifyTrainingFrames appends the method's own renders at nearby poses", "[unit]") {
+  const scene::RgbdDataset train = SmallOffice(40);
+  REQUIRE(train.frames.size() >= 8);
+  const P2iConfig c = DensifyWarp(1.5, 0.1, 5.0);
+  DensifyReport report;
+  const scene::RgbdDataset out = DensifyTrainingFrames(train, c, &report);
+  const size_t n = train.frames.size();
+  const int expected = static_cast<int>(std::lround(1.5 * static_cast<double>(n)));
+  REQUIRE(report.added == expected);
+  REQUIRE(out.frames.size() == n + static_cast<size_t>(expected));
+  for (size_t i = 0; i < n; ++i) {
+    CHECK(out.frames[i].id == train.frames[i].id);
+    CHECK(SameImage(out.frames[i].rgb, train.frames[i].rgb));
+  }
+  // Each added view is warp's render at its pose, and that pose lies within the bounds of some
+  // training pose without being one of them.
+  DepthWarpOptions wo;
+  wo.fill_holes = true;  // the registry's warp fills holes
+  DepthWarp warp(train, wo);
+  std::set<std::string> ids;
+  for (size_t i = n; i < out.frames.size(); ++i) {
+    const scene::RgbdSample& v = out.frames[i];
+    CHECK(v.id.rfind("densify/", 0) == 0);
+    ids.insert(v.id);
+    const scene::RgbdSample ref = warp.Render(v.pose);
+    CHECK(SameImage(v.rgb, ref.rgb));
+    CHECK(SameImage(v.depth, ref.depth));
+    double nearest_t = 1e9, nearest_r = 1e9;
+    for (const auto& f : train.frames) {
+      const double t = scene::Pose::TranslationDistance(v.pose, f.pose);
+      if (t < nearest_t) nearest_t = t, nearest_r = scene::Pose::RotationDistanceDeg(v.pose, f.pose);
+    }
+    CHECK(nearest_t <= 0.1 + 1e-9);
+    CHECK(nearest_r <= 30.0);  // the nearest in translation is close in angle too on a sweep
+  }
+  CHECK(ids.size() == static_cast<size_t>(expected));
+  // Not the training frames re-served: views off the path differ from their nearest frame.
+  int differing = 0;
+  for (size_t i = n; i < out.frames.size(); ++i) {
+    bool equals_some = false;
+    for (const auto& f : train.frames) equals_some = equals_some || SameImage(out.frames[i].rgb, f.rgb);
+    differing += equals_some ? 0 : 1;
+  }
+  CHECK(differing == expected);
+}
+
+TEST_CASE("DensifyTrainingFrames is deterministic for one seed and varies with it", "[unit]") {
+  const scene::RgbdDataset train = SmallOffice(60);
+  P2iConfig c = DensifyWarp(1.0, 0.15, 10.0);
+  const scene::RgbdDataset a = DensifyTrainingFrames(train, c);
+  const scene::RgbdDataset b = DensifyTrainingFrames(train, c);
+  REQUIRE(a.frames.size() == b.frames.size());
+  for (size_t i = train.frames.size(); i < a.frames.size(); ++i) {
+    CHECK(scene::Pose::TranslationDistance(a.frames[i].pose, b.frames[i].pose) == 0.0);
+    CHECK(SameImage(a.frames[i].rgb, b.frames[i].rgb));
+  }
+  c.seed = 2;
+  const scene::RgbdDataset other = DensifyTrainingFrames(train, c);
+  CHECK(scene::Pose::TranslationDistance(other.frames.back().pose, a.frames.back().pose) > 1e-6);
+}
+
+TEST_CASE("DensifyTrainingFrames: off adds nothing, bad methods and sizes are errors", "[unit]") {
+  const scene::RgbdDataset train = SmallOffice(60);
+  P2iConfig off;
+  DensifyReport report;
+  CHECK(DensifyTrainingFrames(train, off, &report).frames.size() == train.frames.size());
+  CHECK(report.added == 0);
+  P2iConfig learned = DensifyWarp(1.0, 0.1, 5.0);
+  learned.densify_method = "p2i";
+  CHECK_THROWS_WITH(DensifyTrainingFrames(train, learned),
+                    Catch::Contains("densify_method 'p2i' is learned"));
+  P2iConfig unknown = DensifyWarp(1.0, 0.1, 5.0);
+  unknown.densify_method = "magic";
+  CHECK_THROWS_WITH(DensifyTrainingFrames(train, unknown), Catch::Contains("'magic' is not one of"));
+}
+
+TEST_CASE("densify keys: read from YAML, written back, bad values name the key", "[unit]") {
+  const P2iConfig c = P2iConfig::FromYamlString(
+      "densify_ratio: 2\ndensify_offset_m: 0.2\ndensify_angle_deg: 15\ndensify_method: warp\n", "t");
+  CHECK(c.densify_ratio == 2.0);
+  CHECK(c.densify_offset_m == 0.2);
+  CHECK(c.densify_angle_deg == 15.0);
+  CHECK(c.densify_method == "warp");
+  const P2iConfig back = P2iConfig::FromYamlString(c.ToYamlString(), "round trip");
+  CHECK(back.densify_ratio == 2.0);
+  CHECK(back.densify_method == "warp");
+  CHECK(P2iConfig{}.densify_ratio == 0.0);  // off unless a config asks
+  CHECK_THROWS_WITH(P2iConfig::FromYamlString("densify_ratio: -1\n", "t"),
+                    Catch::Contains("densify_ratio"));
+  CHECK_THROWS_WITH(P2iConfig::FromYamlString("densify_angle_deg: 120\n", "t"),
+                    Catch::Contains("densify_angle_deg"));
+}
+
+}  // namespace
+}  // namespace p2i::model
