@@ -56,3 +56,24 @@ TEST_CASE("p2i train stops on SIGTERM with a checkpoint at the current step", "[
   CHECK(ReadCheckpointMeta(dir + "/run/checkpoint.pt").phase1_step == meta.phase1_step + 2);
   fs::remove_all(dir);
 }
+
+TEST_CASE("p2i train adds the densified views its config asks for to the training frames", "[integration]") {
+  const auto dir = TempDir("train_densify");
+  P2iConfig c = TinyConfig();
+  c.densify_ratio = 0.5;
+  c.densify_method = "warp";
+  const std::string config = dir + "/tiny.yaml";
+  std::ofstream(config) << c.ToYamlString();
+  const std::string p2i = p2i::testing::BinDir() + "/p2i";
+  int code = -1;
+  // 16 procedural frames, every 10th (5 and 15) held out: 14 train, 7 views added.
+  const std::string out = p2i::testing::RunCommand(
+      p2i + " train " + config + " --data procedural --frames 16 --out " + dir +
+          "/run --phase 1 --steps 1 --threads 1 --quiet 2>&1",
+      &code);
+  INFO(out);
+  CHECK(code == 0);
+  CHECK(out.find("densified: 7 views of warp") != std::string::npos);
+  CHECK(ReadFile(dir + "/run/train_log.jsonl").find("\"train_frames\":21") != std::string::npos);
+  fs::remove_all(dir);
+}
