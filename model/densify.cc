@@ -45,7 +45,11 @@ scene::RgbdDataset DensifyTrainingFrames(const scene::RgbdDataset& train, const 
   const int n = static_cast<int>(std::lround(config.densify_ratio * static_cast<double>(train.frames.size())));
   if (report != nullptr) *report = DensifyReport{};
   if (n <= 0) return out;
-  const MethodInfo& info = GetMethod(config.densify_method);
+  const MethodInfo* found = FindMethod(config.densify_method);
+  if (found == nullptr)
+    throw std::invalid_argument("densify_method: method '" + config.densify_method +
+                                "' is not one of " + MethodNames());
+  const MethodInfo& info = *found;
   if (info.learned)
     throw std::invalid_argument("densify_method '" + info.name +
                                 "' is learned: densify with a method built from the frames "

@@ -142,7 +142,7 @@ TEST_CASE("DensifyTrainingFrames: off adds nothing, bad methods and sizes are er
                     Catch::Contains("densify_method 'p2i' is learned"));
   P2iConfig unknown = DensifyWarp(1.0, 0.1, 5.0);
   unknown.densify_method = "magic";
-  CHECK_THROWS_WITH(DensifyTrainingFrames(train, unknown), Catch::Contains("'magic' is not one of"));
+  CHECK_THROWS_WITH(DensifyTrainingFrames(train, unknown), Catch::Contains("densify_method: method 'magic' is not one of"));
 }
 
 TEST_CASE("densify keys: read from YAML, written back, bad values name the key", "[unit]") {
