@@ -165,12 +165,49 @@ P2iConfig P2iConfig::FromYamlString(const std::string& text, const std::string& 
   return c;
 }
 
-P2iConfig P2iConfig::FromYamlFile(const std::string& path) {
+namespace {
+
+std::string ReadConfigText(const std::string& path) {
   std::ifstream in(path);
   if (!in) throw std::runtime_error("model config: cannot open '" + path + "'");
   std::stringstream ss;
   ss << in.rdbuf();
-  return FromYamlString(ss.str(), path);
+  return ss.str();
+}
+
+}  // namespace
+
+P2iConfig P2iConfig::FromYamlFile(const std::string& path) {
+  return FromYamlString(ReadConfigText(path), path);
+}
+
+P2iConfig P2iConfig::FromYamlFile(const std::string& path,
+                                  const std::vector<std::string>& overrides) {
+  const std::string text = ReadConfigText(path);
+  if (overrides.empty()) return FromYamlString(text, path);
+  YAML::Node root;
+  try {
+    root = YAML::Load(text);
+  } catch (const YAML::Exception& e) {
+    throw std::runtime_error("model config " + path + ": YAML error: " + e.what());
+  }
+  if (!root.IsMap()) throw std::runtime_error("model config " + path + ": expected a map");
+  std::string source = path + " with";
+  for (const std::string& o : overrides) {
+    const size_t eq = o.find('=');
+    if (eq == std::string::npos || eq == 0 || eq + 1 == o.size())
+      throw std::runtime_error("--set '" + o + "': expected KEY=VALUE with a model config key of " +
+                               path + " (docs/MODEL.md), e.g. --set densify_ratio=3");
+    try {
+      root[o.substr(0, eq)] = YAML::Load(o.substr(eq + 1));
+    } catch (const YAML::Exception& e) {
+      throw std::runtime_error("--set '" + o + "': the value is not YAML: " + e.what());
+    }
+    source += " --set " + o;
+  }
+  YAML::Emitter e;
+  e << root;
+  return FromYamlString(e.c_str(), source);
 }
 
 std::string P2iConfig::ToYamlString() const {

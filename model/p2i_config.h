@@ -114,6 +114,9 @@ struct P2iConfig {
   /// Unknown keys are errors naming key and source. Missing keys keep their defaults.
   static P2iConfig FromYamlString(const std::string& text, const std::string& source);
   static P2iConfig FromYamlFile(const std::string& path);
+  /// The file with `KEY=VALUE` overrides applied in order (VALUE is YAML: 3, fusion, [1, 2]),
+  /// as `p2i train --set`. A malformed override or an unknown key is an error naming it.
+  static P2iConfig FromYamlFile(const std::string& path, const std::vector<std::string>& overrides);
   std::string ToYamlString() const;
 };
 

@@ -119,10 +119,15 @@ int RunTrain(const std::vector<std::string>& args) {
                "stops between steps with a checkpoint; --resume continues exactly.",
                "p2i train"};
   std::string config_path, data, split_file, out_dir, init_from;
+  std::vector<std::string> overrides;
   int phase = 0, steps = -1, threads = 2, frames = 300, holdout_every = 10;
   bool resume = false, quiet = false;
   app.add_option("config", config_path, "model config YAML (e.g. model/presets/default.yaml)")
       ->required();
+  app.add_option("--set", overrides,
+                 "KEY=VALUE: override one model config key (repeatable; VALUE is YAML), e.g. "
+                 "--set densify_ratio=3 --set recon_weight=200; the checkpoint keeps the result")
+      ->allow_extra_args(false);
   app.add_option("--data", data,
                  "dataset folder (p2i capture, TUM RGB-D or 7-Scenes layout), builtin:NAME "
                  "(a built-in sim scene rendered along the default arm sweep with the sim "
@@ -167,7 +172,7 @@ int RunTrain(const std::vector<std::string>& args) {
   } catch (const CLI::ParseError& e) {
     return CliExit(app, e);
   }
-  const model::P2iConfig config = model::P2iConfig::FromYamlFile(config_path);
+  const model::P2iConfig config = model::P2iConfig::FromYamlFile(config_path, overrides);
   const TrainVal data_split = LoadTrainVal(config, data, split_file, frames, holdout_every);
   model::DensifyReport dr;
   const scene::RgbdDataset train = model::DensifyTrainingFrames(data_split.train, config, &dr);

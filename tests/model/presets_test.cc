@@ -74,3 +74,33 @@ TEST_CASE("config YAML: unknown keys and bad values are errors naming them", "[u
   CHECK(f2.recon_weight == 10.0);
   CHECK(f2.r1_gamma == 0.5);
 }
+
+TEST_CASE("config --set overrides replace or add keys in order and name a bad one", "[unit]") {
+  const auto demo = p2i::testing::SourceDir() + "/model/presets/demo_128.yaml";
+  const auto plain = P2iConfig::FromYamlFile(demo);
+  const auto same = P2iConfig::FromYamlFile(demo, {});
+  CHECK(same.ToYamlString() == plain.ToYamlString());
+  // densify_* are absent from the file (added), recon_weight is present (replaced), and a later
+  // --set of the same key wins; g_widths takes a YAML list.
+  const auto c = P2iConfig::FromYamlFile(
+      demo, {"densify_ratio=3", "densify_method=warp", "recon_weight=200", "recon_weight=120",
+             "g_widths=[64, 64, 32, 16, 8, 8]"});
+  CHECK(plain.densify_ratio == 0.0);
+  CHECK(c.densify_ratio == 3.0);
+  CHECK(c.densify_method == "warp");
+  CHECK(plain.recon_weight != 120.0);
+  CHECK(c.recon_weight == 120.0);
+  CHECK(c.g_widths == std::vector<int>{64, 64, 32, 16, 8, 8});
+  CHECK(c.name == plain.name);
+  CHECK(c.fourier_bands == plain.fourier_bands);
+  CHECK_THROWS_WITH(P2iConfig::FromYamlFile(demo, {"densify_ratio"}),
+                    Catch::Contains("--set 'densify_ratio'") && Catch::Contains("KEY=VALUE"));
+  CHECK_THROWS_WITH(P2iConfig::FromYamlFile(demo, {"=3"}), Catch::Contains("KEY=VALUE"));
+  CHECK_THROWS_WITH(P2iConfig::FromYamlFile(demo, {"densify_raito=3"}),
+                    Catch::Contains("unknown key 'densify_raito'") &&
+                        Catch::Contains("--set densify_raito=3") && Catch::Contains("demo_128.yaml"));
+  CHECK_THROWS_WITH(P2iConfig::FromYamlFile(demo, {"densify_ratio=-1"}),
+                    Catch::Contains("densify_ratio"));
+  CHECK_THROWS_WITH(P2iConfig::FromYamlFile(demo, {"g_widths=[1, 2"}),
+                    Catch::Contains("--set 'g_widths=[1, 2'") && Catch::Contains("not YAML"));
+}

@@ -77,3 +77,33 @@ TEST_CASE("p2i train adds the densified views its config asks for to the trainin
   CHECK(ReadFile(dir + "/run/train_log.jsonl").find("\"train_frames\":21") != std::string::npos);
   fs::remove_all(dir);
 }
+
+TEST_CASE("p2i train --set overrides config keys before the positional config and names a bad one",
+          "[integration]") {
+  const auto dir = TempDir("train_set");
+  const std::string config = dir + "/tiny.yaml";
+  std::ofstream(config) << TinyConfig().ToYamlString();  // densify_ratio 0 in the file
+  const std::string p2i = p2i::testing::BinDir() + "/p2i";
+  int code = -1;
+  // Two --set options before the positional: each takes one value, the config stays positional.
+  const std::string out = p2i::testing::RunCommand(
+      p2i + " train --set densify_ratio=0.5 --set densify_method=warp " + config +
+          " --data procedural --frames 16 --out " + dir +
+          "/run --phase 1 --steps 1 --threads 1 --quiet 2>&1",
+      &code);
+  INFO(out);
+  CHECK(code == 0);
+  CHECK(out.find("densified: 7 views of warp") != std::string::npos);
+  CHECK(ReadFile(dir + "/run/train_log.jsonl").find("\"train_frames\":21") != std::string::npos);
+  int bad_code = -1;
+  const std::string bad = p2i::testing::RunCommand(
+      p2i + " train " + config + " --set densify_raito=1 --data procedural --frames 16 --out " +
+          dir + "/bad --steps 1 --threads 1 --quiet 2>&1",
+      &bad_code);
+  INFO(bad);
+  CHECK(bad_code != 0);
+  CHECK(bad.find("unknown key 'densify_raito'") != std::string::npos);
+  CHECK(bad.find("--set densify_raito=1") != std::string::npos);
+  CHECK_FALSE(fs::exists(dir + "/bad/checkpoint.pt"));
+  fs::remove_all(dir);
+}
