@@ -86,8 +86,18 @@ void P2iConfig::Validate() const {
   if (k1 < 0 || k2 < 0 || k3 < 0) fail("k1, k2, k3 must be >= 0");
 }
 
-P2iConfig P2iConfig::FromYamlString(const std::string& text, const std::string& source) {
-  P2iConfig c;
+namespace {
+
+std::string ReadConfigText(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error("model config: cannot open '" + path + "'");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+/// The config text as a YAML map; errors name `source`.
+YAML::Node LoadConfigMap(const std::string& text, const std::string& source) {
   YAML::Node root;
   try {
     root = YAML::Load(text);
@@ -95,6 +105,14 @@ P2iConfig P2iConfig::FromYamlString(const std::string& text, const std::string& 
     throw std::runtime_error("model config " + source + ": YAML error: " + e.what());
   }
   if (!root.IsMap()) throw std::runtime_error("model config " + source + ": expected a map");
+  return root;
+}
+
+}  // namespace
+
+P2iConfig P2iConfig::FromYamlString(const std::string& text, const std::string& source) {
+  P2iConfig c;
+  const YAML::Node root = LoadConfigMap(text, source);
   using Setter = std::function<void(const YAML::Node&)>;
   std::map<std::string, Setter> setters = {
       {"name", [&](const YAML::Node& n) { c.name = n.as<std::string>(); }},
@@ -165,18 +183,6 @@ P2iConfig P2iConfig::FromYamlString(const std::string& text, const std::string& 
   return c;
 }
 
-namespace {
-
-std::string ReadConfigText(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error("model config: cannot open '" + path + "'");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
-}  // namespace
-
 P2iConfig P2iConfig::FromYamlFile(const std::string& path) {
   return FromYamlString(ReadConfigText(path), path);
 }
@@ -185,13 +191,7 @@ P2iConfig P2iConfig::FromYamlFile(const std::string& path,
                                   const std::vector<std::string>& overrides) {
   const std::string text = ReadConfigText(path);
   if (overrides.empty()) return FromYamlString(text, path);
-  YAML::Node root;
-  try {
-    root = YAML::Load(text);
-  } catch (const YAML::Exception& e) {
-    throw std::runtime_error("model config " + path + ": YAML error: " + e.what());
-  }
-  if (!root.IsMap()) throw std::runtime_error("model config " + path + ": expected a map");
+  YAML::Node root = LoadConfigMap(text, path);
   std::string source = path + " with";
   for (const std::string& o : overrides) {
     const size_t eq = o.find('=');

@@ -11,7 +11,6 @@
 #include <opencv2/core.hpp>
 
 #include "model/baseline_warp.h"
-#include "model/metrics.h"
 #include "scene/sim_scene.h"
 #include "scene/trajectory.h"
 

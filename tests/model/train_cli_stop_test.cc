@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <fstream>
 #include <thread>
+#include <vector>
 
 #include <catch2/catch.hpp>
 #include <torch/torch.h>
@@ -57,47 +58,36 @@ TEST_CASE("p2i train stops on SIGTERM with a checkpoint at the current step", "[
   fs::remove_all(dir);
 }
 
-TEST_CASE("p2i train adds the densified views its config asks for to the training frames", "[integration]") {
+TEST_CASE("p2i train adds the densified views its config or --set asks for and names a bad --set key",
+          "[integration]") {
   const auto dir = TempDir("train_densify");
   P2iConfig c = TinyConfig();
+  const std::string plain = dir + "/tiny.yaml";  // densify_ratio 0
+  std::ofstream(plain) << c.ToYamlString();
   c.densify_ratio = 0.5;
   c.densify_method = "warp";
-  const std::string config = dir + "/tiny.yaml";
-  std::ofstream(config) << c.ToYamlString();
+  const std::string densify = dir + "/tiny_densify.yaml";
+  std::ofstream(densify) << c.ToYamlString();
   const std::string p2i = p2i::testing::BinDir() + "/p2i";
-  int code = -1;
-  // 16 procedural frames, every 10th (5 and 15) held out: 14 train, 7 views added.
-  const std::string out = p2i::testing::RunCommand(
-      p2i + " train " + config + " --data procedural --frames 16 --out " + dir +
-          "/run --phase 1 --steps 1 --threads 1 --quiet 2>&1",
-      &code);
-  INFO(out);
-  CHECK(code == 0);
-  CHECK(out.find("densified: 7 views of warp") != std::string::npos);
-  CHECK(ReadFile(dir + "/run/train_log.jsonl").find("\"train_frames\":21") != std::string::npos);
-  fs::remove_all(dir);
-}
-
-TEST_CASE("p2i train --set overrides config keys before the positional config and names a bad one",
-          "[integration]") {
-  const auto dir = TempDir("train_set");
-  const std::string config = dir + "/tiny.yaml";
-  std::ofstream(config) << TinyConfig().ToYamlString();  // densify_ratio 0 in the file
-  const std::string p2i = p2i::testing::BinDir() + "/p2i";
-  int code = -1;
-  // Two --set options before the positional: each takes one value, the config stays positional.
-  const std::string out = p2i::testing::RunCommand(
-      p2i + " train --set densify_ratio=0.5 --set densify_method=warp " + config +
-          " --data procedural --frames 16 --out " + dir +
-          "/run --phase 1 --steps 1 --threads 1 --quiet 2>&1",
-      &code);
-  INFO(out);
-  CHECK(code == 0);
-  CHECK(out.find("densified: 7 views of warp") != std::string::npos);
-  CHECK(ReadFile(dir + "/run/train_log.jsonl").find("\"train_frames\":21") != std::string::npos);
+  // 16 procedural frames, every 10th (5 and 15) held out: 14 train, 7 views added. The --set
+  // options come before the positional config: each takes one value.
+  const std::vector<std::string> ways = {
+      densify, "--set densify_ratio=0.5 --set densify_method=warp " + plain};
+  for (size_t i = 0; i < ways.size(); ++i) {
+    const std::string run = dir + "/run" + std::to_string(i);
+    int code = -1;
+    const std::string out = p2i::testing::RunCommand(
+        p2i + " train " + ways[i] + " --data procedural --frames 16 --out " + run +
+            " --phase 1 --steps 1 --threads 1 --quiet 2>&1",
+        &code);
+    INFO(ways[i] << "\n" << out);
+    CHECK(code == 0);
+    CHECK(out.find("densified: 7 views of warp") != std::string::npos);
+    CHECK(ReadFile(run + "/train_log.jsonl").find("\"train_frames\":21") != std::string::npos);
+  }
   int bad_code = -1;
   const std::string bad = p2i::testing::RunCommand(
-      p2i + " train " + config + " --set densify_raito=1 --data procedural --frames 16 --out " +
+      p2i + " train " + plain + " --set densify_raito=1 --data procedural --frames 16 --out " +
           dir + "/bad --steps 1 --threads 1 --quiet 2>&1",
       &bad_code);
   INFO(bad);
