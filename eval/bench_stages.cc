@@ -468,9 +468,8 @@ void TrainLearned(Measurement& ms, const SizeRuns& sr, const MethodSpec& m, int 
   std::fflush(stdout);
   model::DensifyReport dr;
   const scene::RgbdDataset train = model::DensifyTrainingFrames(sr.train, mc, &dr);
-  if (dr.added > 0 && !quiet)
-    std::printf("  densified: %d views of %s near the training poses (%.1f s)\n", dr.added,
-                mc.densify_method.c_str(), dr.render_s);
+  const std::string densified = model::DensifySummary(dr, mc);
+  if (!densified.empty() && !quiet) std::printf("  %s\n", densified.c_str());
   model::TrainReport tr;
   try {
     tr = model::Trainer(mc, to).Run(train, scene::RgbdDataset{sr.train.camera, {}});

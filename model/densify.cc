@@ -38,6 +38,31 @@ scene::Pose NearbyPose(const scene::Pose& pose, double max_offset_m, double max_
                      pose.rotation() * Eigen::Quaterniond(Eigen::AngleAxisd(angle, axis)));
 }
 
+std::string DensifySummary(const DensifyReport& report, const P2iConfig& config) {
+  if (report.added == 0 && report.skipped == 0) return "";
+  char line[256];
+  std::snprintf(line, sizeof(line), "densified: %d views of %s near the training poses (%.1f s)",
+                report.added, config.densify_method.c_str(), report.render_s);
+  std::string out = line;
+  if (config.densify_min_gap_m > 0) {
+    std::snprintf(line, sizeof(line),
+                  "; %d candidates skipped within %.3g m and %.3g deg of a training frame",
+                  report.skipped, config.densify_min_gap_m, config.densify_min_gap_deg);
+    out += line;
+  }
+  return out;
+}
+
+bool NearAnyFrame(const scene::Pose& pose, const std::vector<scene::RgbdSample>& frames,
+                  double gap_m, double gap_deg) {
+  const double gap_rad = gap_deg * M_PI / 180.0;
+  for (const scene::RgbdSample& f : frames) {
+    if ((f.pose.translation() - pose.translation()).norm() > gap_m) continue;
+    if (f.pose.rotation().angularDistance(pose.rotation()) <= gap_rad) return true;
+  }
+  return false;
+}
+
 scene::RgbdDataset DensifyTrainingFrames(const scene::RgbdDataset& train, const P2iConfig& config,
                                          DensifyReport* report) {
   const auto t0 = std::chrono::steady_clock::now();
@@ -67,9 +92,16 @@ scene::RgbdDataset DensifyTrainingFrames(const scene::RgbdDataset& train, const 
   std::mt19937_64 rng(config.seed * 0x9E3779B97F4A7C15ULL + 0xD3A5F1);
   std::uniform_int_distribution<size_t> pick(0, train.frames.size() - 1);
   out.frames.reserve(train.frames.size() + static_cast<size_t>(n));
-  for (int i = 0; i < n; ++i) {
+  const bool gap = config.densify_min_gap_m > 0;
+  int added = 0, skipped = 0;
+  for (int candidate = 0; candidate < n; ++candidate) {
     const scene::RgbdSample& base = train.frames[pick(rng)];
     const scene::Pose pose = NearbyPose(base.pose, config.densify_offset_m, config.densify_angle_deg, rng);
+    if (gap && NearAnyFrame(pose, train.frames, config.densify_min_gap_m, config.densify_min_gap_deg)) {
+      ++skipped;
+      continue;
+    }
+    const int i = added++;
     scene::RgbdSample view = renderer->Render(pose);
     view.pose = pose;
     view.stamp = base.stamp;
@@ -79,7 +111,8 @@ scene::RgbdDataset DensifyTrainingFrames(const scene::RgbdDataset& train, const 
     out.frames.push_back(std::move(view));
   }
   if (report != nullptr) {
-    report->added = n;
+    report->added = added;
+    report->skipped = skipped;
     report->render_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   }
   return out;

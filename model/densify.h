@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <random>
 #include <string>
+#include <vector>
 
 #include "model/p2i_config.h"
 #include "scene/pose.h"
@@ -22,16 +23,29 @@ namespace p2i::model {
 scene::Pose NearbyPose(const scene::Pose& pose, double max_offset_m, double max_angle_deg,
                        std::mt19937_64& rng);
 
+/// True when some frame of `frames` lies within `gap_m` of `pose` and within `gap_deg` of its
+/// orientation (the angle of the relative rotation).
+bool NearAnyFrame(const scene::Pose& pose, const std::vector<scene::RgbdSample>& frames,
+                  double gap_m, double gap_deg);
+
 /// What DensifyTrainingFrames added.
 struct DensifyReport {
   int added = 0;          ///< rendered views appended
+  int skipped = 0;        ///< candidate poses skipped: a training frame within the min gap
   double render_s = 0.0;  ///< building the renderer and rendering, seconds
 };
+
+/// One line for logs: "densified: N views of METHOD near the training poses (X s)", plus the
+/// skipped candidates when the min gap is on; empty when nothing was added or skipped.
+std::string DensifySummary(const DensifyReport& report, const P2iConfig& config);
 
 /// `train` and, appended, round(config.densify_ratio x train.frames.size()) views of
 /// config.densify_method (built over `train` with its default options, hole filling on where
 /// the method has it) at NearbyPose of training poses drawn uniformly (seeded by config.seed:
-/// the same config and frames give the same views, so a resumed run sees the same data). Their
+/// the same config and frames give the same views, so a resumed run sees the same data). With
+/// densify_min_gap_m > 0 the candidates near a training frame (densify_min_gap_m and
+/// densify_min_gap_deg) are dropped, not replaced: the views are those of the gap-off run minus
+/// those, so a dense capture gets fewer than a sparse one. Their
 /// ids are "densify/NNNNNN"; depth 0 where the renderer has no geometry. densify_ratio 0
 /// returns `train` unchanged. Throws std::invalid_argument when the method is unknown, learned
 /// (only methods built from frames can densify) or renders at another size than the frames.

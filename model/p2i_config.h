@@ -76,6 +76,12 @@ struct P2iConfig {
   double densify_offset_m = 0.15;
   double densify_angle_deg = 10.0;
   std::string densify_method = "fusion";
+  /// Density-aware densifying (0 = off): of the round(densify_ratio x frames) candidate poses,
+  /// those with a training frame within densify_min_gap_m and within densify_min_gap_deg of
+  /// their orientation are dropped, so a dense capture gets fewer extra views than a sparse one
+  /// (DensifyReport::skipped counts them).
+  double densify_min_gap_m = 0.0;
+  double densify_min_gap_deg = 5.0;
 
   // --- optimisation ---
   int batch_size = 16;

@@ -176,9 +176,8 @@ int RunTrain(const std::vector<std::string>& args) {
   const TrainVal data_split = LoadTrainVal(config, data, split_file, frames, holdout_every);
   model::DensifyReport dr;
   const scene::RgbdDataset train = model::DensifyTrainingFrames(data_split.train, config, &dr);
-  if (dr.added > 0)
-    std::fprintf(stderr, "densified: %d views of %s near the training poses (%.1f s)\n",
-                 dr.added, config.densify_method.c_str(), dr.render_s);
+  const std::string densified = model::DensifySummary(dr, config);
+  if (!densified.empty()) std::fprintf(stderr, "%s\n", densified.c_str());
   return Train(config, train, data_split.val, out_dir, phase, steps, threads, resume, quiet,
                init_from);
 }

@@ -144,6 +144,71 @@ TEST_CASE("DensifyTrainingFrames: off adds nothing, bad methods and sizes are er
   CHECK_THROWS_WITH(DensifyTrainingFrames(train, unknown), Catch::Contains("densify_method: method 'magic' is not one of"));
 }
 
+TEST_CASE("NearAnyFrame needs both the distance and the angle within the gap", "[unit]") {
+  const scene::RgbdDataset train = SmallOffice(60);
+  const scene::Pose at = train.frames[1].pose;
+  CHECK(NearAnyFrame(at, train.frames, 0.04, 5.0));
+  const scene::Pose moved(at.translation() + Eigen::Vector3d(0.0, 0.0, 0.05), at.rotation());
+  CHECK_FALSE(NearAnyFrame(moved, train.frames, 0.04, 5.0));
+  CHECK(NearAnyFrame(moved, train.frames, 0.06, 5.0));
+  const scene::Pose turned(at.translation(),
+                           at.rotation() * Eigen::Quaterniond(Eigen::AngleAxisd(10.0 * M_PI / 180.0,
+                                                                                 Eigen::Vector3d::UnitX())));
+  CHECK_FALSE(NearAnyFrame(turned, train.frames, 0.04, 5.0));
+  CHECK(NearAnyFrame(turned, train.frames, 0.04, 11.0));
+}
+
+TEST_CASE("DensifyTrainingFrames with a min gap drops poses near training frames, more in a denser capture",
+          "[unit]") {
+  P2iConfig c = DensifyWarp(1.0, 0.1, 5.0);
+  c.densify_min_gap_m = 0.04;
+  c.densify_min_gap_deg = 5.0;
+  double skipped_share[2] = {0.0, 0.0};
+  const int steps[2] = {40, 4};  // a sparse and a ten times denser capture of the same sweep
+  for (int k = 0; k < 2; ++k) {
+    const scene::RgbdDataset train = SmallOffice(steps[k]);
+    DensifyReport report;
+    const scene::RgbdDataset out = DensifyTrainingFrames(train, c, &report);
+    REQUIRE(out.frames.size() == train.frames.size() + static_cast<size_t>(report.added));
+    REQUIRE(report.added > 0);
+    for (size_t i = train.frames.size(); i < out.frames.size(); ++i) {
+      INFO(out.frames[i].id);
+      CHECK_FALSE(NearAnyFrame(out.frames[i].pose, train.frames, 0.04, 5.0));
+    }
+    skipped_share[k] = report.skipped / static_cast<double>(report.added + report.skipped);
+    CHECK(DensifySummary(report, c).find(std::to_string(report.skipped) + " candidates skipped") !=
+          std::string::npos);
+  }
+  CHECK(skipped_share[1] > skipped_share[0] + 0.2);
+  // The kept views are the gap-off run's views minus the dropped ones, in order.
+  const scene::RgbdDataset train = SmallOffice(4);
+  const scene::RgbdDataset with_gap = DensifyTrainingFrames(train, c);
+  c.densify_min_gap_m = 0.0;
+  DensifyReport off;
+  const scene::RgbdDataset without = DensifyTrainingFrames(train, c, &off);
+  CHECK(off.skipped == 0);
+  CHECK(off.added == static_cast<int>(train.frames.size()));
+  size_t j = train.frames.size();
+  for (size_t i = train.frames.size(); i < with_gap.frames.size(); ++i) {
+    while (j < without.frames.size() &&
+           scene::Pose::TranslationDistance(without.frames[j].pose, with_gap.frames[i].pose) > 0.0)
+      ++j;
+    REQUIRE(j < without.frames.size());
+    CHECK(SameImage(without.frames[j].rgb, with_gap.frames[i].rgb));
+    ++j;
+  }
+  // A gap nothing escapes: every candidate dropped.
+  c.densify_min_gap_m = 10.0;
+  c.densify_min_gap_deg = 180.0;
+  DensifyReport none;
+  CHECK(DensifyTrainingFrames(train, c, &none).frames.size() == train.frames.size());
+  CHECK(none.added == 0);
+  CHECK(none.skipped == static_cast<int>(train.frames.size()));
+  c.densify_min_gap_m = 0.0;
+  CHECK(DensifySummary(off, c).find("skipped") == std::string::npos);
+  CHECK(DensifySummary(off, c).find("densified: " + std::to_string(off.added) + " views of warp") == 0);
+}
+
 TEST_CASE("densify keys: read from YAML, written back, bad values name the key", "[unit]") {
   const P2iConfig c = P2iConfig::FromYamlString(
       "densify_ratio: 2\ndensify_offset_m: 0.2\ndensify_angle_deg: 15\ndensify_method: warp\n", "t");
@@ -159,6 +224,15 @@ TEST_CASE("densify keys: read from YAML, written back, bad values name the key",
                     Catch::Contains("densify_ratio"));
   CHECK_THROWS_WITH(P2iConfig::FromYamlString("densify_angle_deg: 120\n", "t"),
                     Catch::Contains("densify_angle_deg"));
+  const P2iConfig g = P2iConfig::FromYamlString("densify_min_gap_m: 0.05\ndensify_min_gap_deg: 3\n", "t");
+  const P2iConfig g_back = P2iConfig::FromYamlString(g.ToYamlString(), "round trip");
+  CHECK(g_back.densify_min_gap_m == 0.05);
+  CHECK(g_back.densify_min_gap_deg == 3.0);
+  CHECK(P2iConfig{}.densify_min_gap_m == 0.0);  // off unless a config asks
+  CHECK_THROWS_WITH(P2iConfig::FromYamlString("densify_min_gap_m: -0.1\n", "t"),
+                    Catch::Contains("densify_min_gap_m"));
+  CHECK_THROWS_WITH(P2iConfig::FromYamlString("densify_min_gap_deg: 200\n", "t"),
+                    Catch::Contains("densify_min_gap_deg"));
 }
 
 }  // namespace
