@@ -55,11 +55,10 @@ std::string DensifySummary(const DensifyReport& report, const P2iConfig& config)
 
 bool NearAnyFrame(const scene::Pose& pose, const std::vector<scene::RgbdSample>& frames,
                   double gap_m, double gap_deg) {
-  const double gap_rad = gap_deg * M_PI / 180.0;
-  for (const scene::RgbdSample& f : frames) {
-    if ((f.pose.translation() - pose.translation()).norm() > gap_m) continue;
-    if (f.pose.rotation().angularDistance(pose.rotation()) <= gap_rad) return true;
-  }
+  for (const scene::RgbdSample& f : frames)
+    if (scene::Pose::TranslationDistance(f.pose, pose) <= gap_m &&
+        scene::Pose::RotationDistanceDeg(f.pose, pose) <= gap_deg)
+      return true;
   return false;
 }
 
