@@ -105,7 +105,7 @@ scene::RgbdDataset DensifyTrainingFrames(const scene::RgbdDataset& train, const 
     view.pose = pose;
     view.stamp = base.stamp;
     char id[32];
-    std::snprintf(id, sizeof(id), "densify/%06d", i);
+    std::snprintf(id, sizeof(id), "%s%06d", kDensifiedIdPrefix, i);
     view.id = id;
     out.frames.push_back(std::move(view));
   }

@@ -28,6 +28,14 @@ scene::Pose NearbyPose(const scene::Pose& pose, double max_offset_m, double max_
 bool NearAnyFrame(const scene::Pose& pose, const std::vector<scene::RgbdSample>& frames,
                   double gap_m, double gap_deg);
 
+/// The id prefix of the views DensifyTrainingFrames appends ("densify/NNNNNN").
+inline constexpr const char* kDensifiedIdPrefix = "densify/";
+
+/// True for a view DensifyTrainingFrames rendered, false for a captured frame.
+inline bool IsDensified(const scene::RgbdSample& frame) {
+  return frame.id.rfind(kDensifiedIdPrefix, 0) == 0;
+}
+
 /// What DensifyTrainingFrames added.
 struct DensifyReport {
   int added = 0;          ///< rendered views appended

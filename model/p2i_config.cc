@@ -80,6 +80,9 @@ void P2iConfig::Validate() const {
     fail("densify_min_gap_m must be in [0, 10] metres (0 = off)");
   if (!(densify_min_gap_deg >= 0 && densify_min_gap_deg <= 180))
     fail("densify_min_gap_deg must be in [0, 180] degrees");
+  if (!(densify_real_share >= 0 && densify_real_share < 1))
+    fail("densify_real_share must be in [0, 1) (0 = off; 1 would never show a densified view: "
+         "set densify_ratio 0 instead)");
   if (steps_phase1 < 0 || steps_phase2 < 0) fail("steps_phase1/2 must be >= 0");
   if (!(lr_g > 0 && lr_d > 0 && lr_enet > 0)) fail("learning rates must be > 0");
   if (lr_decay_steps < 0) fail("lr_decay_steps must be >= 0 (0 = constant learning rates)");
@@ -139,6 +142,7 @@ P2iConfig P2iConfig::FromYamlString(const std::string& text, const std::string& 
       {"densify_method", [&](const YAML::Node& n) { c.densify_method = n.as<std::string>(); }},
       {"densify_min_gap_m", [&](const YAML::Node& n) { c.densify_min_gap_m = n.as<double>(); }},
       {"densify_min_gap_deg", [&](const YAML::Node& n) { c.densify_min_gap_deg = n.as<double>(); }},
+      {"densify_real_share", [&](const YAML::Node& n) { c.densify_real_share = n.as<double>(); }},
       {"d_base_width", [&](const YAML::Node& n) { c.d_base_width = n.as<int>(); }},
       {"d_max_width", [&](const YAML::Node& n) { c.d_max_width = n.as<int>(); }},
       {"latent_dim", [&](const YAML::Node& n) { c.latent_dim = n.as<int>(); }},
@@ -239,6 +243,7 @@ std::string P2iConfig::ToYamlString() const {
   e << YAML::Key << "densify_method" << YAML::Value << densify_method;
   e << YAML::Key << "densify_min_gap_m" << YAML::Value << densify_min_gap_m;
   e << YAML::Key << "densify_min_gap_deg" << YAML::Value << densify_min_gap_deg;
+  e << YAML::Key << "densify_real_share" << YAML::Value << densify_real_share;
   e << YAML::Key << "d_base_width" << YAML::Value << d_base_width;
   e << YAML::Key << "d_max_width" << YAML::Value << d_max_width;
   e << YAML::Key << "latent_dim" << YAML::Value << latent_dim;

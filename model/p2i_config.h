@@ -82,6 +82,11 @@ struct P2iConfig {
   /// (DensifyReport::skipped counts them).
   double densify_min_gap_m = 0.0;
   double densify_min_gap_deg = 5.0;
+  /// Share of each training batch drawn from the captured frames when densified views are
+  /// present (0 = off: every frame, captured or densified, equally likely). E.g. 0.5 keeps half
+  /// of each batch real however many views densify_ratio adds, so a dense capture's frames are
+  /// not seen a quarter as often at ratio 3. In [0, 1).
+  double densify_real_share = 0.0;
 
   // --- optimisation ---
   int batch_size = 16;

@@ -18,8 +18,10 @@
 #include <opencv2/imgproc.hpp>
 #include <torch/torch.h>
 
+#include "model/batch_sampler.h"
 #include "model/checkpoint.h"
 #include "model/data_parallel.h"
+#include "model/densify.h"
 #include "model/losses.h"
 #include "model/metrics.h"
 #include "model/networks.h"
@@ -172,6 +174,8 @@ class TrainingRun {
   std::unique_ptr<torch::optim::Adam> opt_g_, opt_d_, opt_e_;
   CheckpointMeta meta_;
   Prepared train_, val_;
+  // Training frames by kind, for densify_real_share: captured, and densified (model/densify.h).
+  std::vector<int64_t> captured_, densified_;
   std::ofstream log_;
   double ema_ = -1.0;
   double decay_ = 1.0;  // phase 1's learning-rate factor (config lr_decay_steps)
@@ -378,16 +382,16 @@ Validation TrainingRun::Validate(bool use_enet) {
 }
 
 torch::Tensor TrainingRun::BatchIndices(int phase, int step, int64_t n) const {
-  // A pure function of (seed, phase, step): resuming needs no sampler state.
-  std::mt19937_64 rng(config_.seed * 1000003ULL + static_cast<uint64_t>(phase) * 7919ULL +
-                      static_cast<uint64_t>(step));
-  std::uniform_int_distribution<int64_t> pick(0, n - 1);
-  // Data-parallel: one global batch of batch_size x ranks; each rank trains on its slice.
-  const int world = dp_ ? dp_->WorldSize() : 1, rank = dp_ ? dp_->Rank() : 0;
-  std::vector<int64_t> idx(static_cast<size_t>(config_.batch_size) * world);
-  for (auto& i : idx) i = pick(rng);
-  idx.erase(idx.begin(), idx.begin() + rank * config_.batch_size);
-  idx.resize(static_cast<size_t>(config_.batch_size));
+  BatchDraw d;
+  d.seed = config_.seed;
+  d.phase = phase;
+  d.step = step;
+  d.batch_size = config_.batch_size;
+  d.world = dp_ ? dp_->WorldSize() : 1;
+  d.rank = dp_ ? dp_->Rank() : 0;
+  const std::vector<int64_t> idx = config_.densify_real_share > 0
+                                       ? DrawMixedBatch(d, captured_, densified_, config_.densify_real_share)
+                                       : DrawBatch(d, n);
   return torch::tensor(idx, torch::kLong);
 }
 
@@ -741,6 +745,8 @@ void TrainingRun::LogStart(const scene::RgbdDataset& train, const std::string& w
        {"phase1_step", meta_.phase1_step},
        {"phase2_step", meta_.phase2_step},
        {"train_frames", train.frames.size()},
+       {"densified_frames", densified_.size()},
+       {"densify_real_share", config_.densify_real_share},
        {"val_frames", val_.rgb.size()},
        {"threads", options_.threads},
        {"mean_image_val_psnr", mean_psnr}});
@@ -782,6 +788,8 @@ TrainReport TrainingRun::Execute(const scene::RgbdDataset& train, const scene::R
   if (dp_) dp_->Start(&meta_.phase1_step, &meta_.phase2_step, *nets_);  // same start everywhere
   ShareNormalizer(train, !load_ && warm_from.empty());
   train_ = Prepare(train.frames, config_, meta_.normalizer, train.frames.size());
+  for (size_t i = 0; i < train.frames.size(); ++i)
+    (IsDensified(train.frames[i]) ? densified_ : captured_).push_back(static_cast<int64_t>(i));
   val_ = Prepare(val.frames, config_, meta_.normalizer, static_cast<size_t>(options_.max_val_frames));
   TrainReport report;
   report.mean_image_val_psnr = MeanImagePsnr();

@@ -80,6 +80,7 @@ TEST_CASE("DensifyTrainingFrames appends the method's own renders at nearby pose
   REQUIRE(out.frames.size() == n + static_cast<size_t>(expected));
   for (size_t i = 0; i < n; ++i) {
     CHECK(out.frames[i].id == train.frames[i].id);
+    CHECK_FALSE(IsDensified(out.frames[i]));
     CHECK(SameImage(out.frames[i].rgb, train.frames[i].rgb));
   }
   // Each added view is warp's render at its pose, and that pose lies within the bounds of some
@@ -91,6 +92,7 @@ TEST_CASE("DensifyTrainingFrames appends the method's own renders at nearby pose
   for (size_t i = n; i < out.frames.size(); ++i) {
     const scene::RgbdSample& v = out.frames[i];
     CHECK(v.id.rfind("densify/", 0) == 0);
+    CHECK(IsDensified(v));
     ids.insert(v.id);
     const scene::RgbdSample ref = warp.Render(v.pose);
     CHECK(SameImage(v.rgb, ref.rgb));
@@ -233,6 +235,12 @@ TEST_CASE("densify keys: read from YAML, written back, bad values name the key",
                     Catch::Contains("densify_min_gap_m"));
   CHECK_THROWS_WITH(P2iConfig::FromYamlString("densify_min_gap_deg: 200\n", "t"),
                     Catch::Contains("densify_min_gap_deg"));
+  CHECK(P2iConfig{}.densify_real_share == 0.0);  // off unless a config asks
+  CHECK(P2iConfig::FromYamlString(P2iConfig::FromYamlString("densify_real_share: 0.5\n", "t").ToYamlString(),
+                                  "round trip")
+            .densify_real_share == 0.5);
+  CHECK_THROWS_WITH(P2iConfig::FromYamlString("densify_real_share: 1\n", "t"),
+                    Catch::Contains("densify_real_share must be in [0, 1)"));
 }
 
 }  // namespace
