@@ -159,7 +159,7 @@ class TrainingRun {
   void Log(const json& line);
   void Progress(const char* phase, int step, int target, const std::string& losses);
   Validation Validate(bool use_enet);
-  torch::Tensor BatchIndices(int phase, int step, int64_t n) const;
+  torch::Tensor BatchIndices(int phase, int step) const;
   void CheckLoss(const torch::Tensor& loss, const char* what, int step);
   void TrackLoss(double magnitude);
   void UpdateEma();
@@ -381,7 +381,7 @@ Validation TrainingRun::Validate(bool use_enet) {
   return v;
 }
 
-torch::Tensor TrainingRun::BatchIndices(int phase, int step, int64_t n) const {
+torch::Tensor TrainingRun::BatchIndices(int phase, int step) const {
   BatchDraw d;
   d.seed = config_.seed;
   d.phase = phase;
@@ -389,10 +389,8 @@ torch::Tensor TrainingRun::BatchIndices(int phase, int step, int64_t n) const {
   d.batch_size = config_.batch_size;
   d.world = dp_ ? dp_->WorldSize() : 1;
   d.rank = dp_ ? dp_->Rank() : 0;
-  const std::vector<int64_t> idx = config_.densify_real_share > 0
-                                       ? DrawMixedBatch(d, captured_, densified_, config_.densify_real_share)
-                                       : DrawBatch(d, n);
-  return torch::tensor(idx, torch::kLong);
+  // Share 0 (or no densified frames): DrawMixedBatch is the uniform DrawBatch over all frames.
+  return torch::tensor(DrawMixedBatch(d, captured_, densified_, config_.densify_real_share), torch::kLong);
 }
 
 // The divergence guard on one loss. One process: throws Divergence at once. Data-parallel: the
@@ -462,9 +460,8 @@ StepOutcome TrainingRun::BaselineStep(int step, const torch::Tensor& real, const
 // with fakes made without autograd.
 void TrainingRun::ExtraDiscriminatorSteps(int step) {
   const LossWeights w = LossWeights::From(config_);
-  const int64_t n = train_.images.size(0);
   for (int k = 1; k < config_.d_steps; ++k) {
-    const auto idx_k = BatchIndices(100 + k, step, n);
+    const auto idx_k = BatchIndices(100 + k, step);
     const auto y_k = train_.poses.index_select(0, idx_k);
     torch::Tensor fake_k;
     {
@@ -545,14 +542,13 @@ StepOutcome TrainingRun::AdversarialStep(int step, const torch::Tensor& real,
 }
 
 int TrainingRun::PhaseOne(int target) {
-  const int64_t n = train_.images.size(0);
   phase_start_ = Clock::now();
   phase_start_step_ = meta_.phase1_step;
   const char* name = config_.IsBaseline() ? "cnn" : "phase1";
   while (meta_.phase1_step < target) {
     if (StopNow()) break;
     const int step = meta_.phase1_step;
-    const auto idx = BatchIndices(1, step, n);
+    const auto idx = BatchIndices(1, step);
     const auto real = train_.images.index_select(0, idx);
     const auto y = train_.poses.index_select(0, idx);
     if (config_.lr_decay_steps > 0) DecayLearningRates(step, target);
@@ -594,7 +590,6 @@ StepOutcome TrainingRun::EnetStep(int step, const torch::Tensor& generated,
 }
 
 int TrainingRun::PhaseTwo(int target) {
-  const int64_t n = train_.images.size(0);
   nets_->g->eval();
   for (auto& p : nets_->g->parameters()) p.set_requires_grad(false);
   phase_start_ = Clock::now();
@@ -603,7 +598,7 @@ int TrainingRun::PhaseTwo(int target) {
   while (meta_.phase2_step < target) {
     if (StopNow()) break;
     const int step = meta_.phase2_step;
-    const auto idx = BatchIndices(2, step, n);
+    const auto idx = BatchIndices(2, step);
     const auto real = train_.images.index_select(0, idx);
     const auto y = train_.poses.index_select(0, idx);
     torch::Tensor generated;
