@@ -83,6 +83,7 @@ void P2iConfig::Validate() const {
   if (!(densify_real_share >= 0 && densify_real_share < 1))
     fail("densify_real_share must be in [0, 1) (0 = off; 1 would never show a densified view: "
          "set densify_ratio 0 instead)");
+  if (densify_steps < -1) fail("densify_steps must be >= -1 (-1 = densified views in every step)");
   if (steps_phase1 < 0 || steps_phase2 < 0) fail("steps_phase1/2 must be >= 0");
   if (!(lr_g > 0 && lr_d > 0 && lr_enet > 0)) fail("learning rates must be > 0");
   if (lr_decay_steps < 0) fail("lr_decay_steps must be >= 0 (0 = constant learning rates)");
@@ -143,6 +144,7 @@ P2iConfig P2iConfig::FromYamlString(const std::string& text, const std::string& 
       {"densify_min_gap_m", [&](const YAML::Node& n) { c.densify_min_gap_m = n.as<double>(); }},
       {"densify_min_gap_deg", [&](const YAML::Node& n) { c.densify_min_gap_deg = n.as<double>(); }},
       {"densify_real_share", [&](const YAML::Node& n) { c.densify_real_share = n.as<double>(); }},
+      {"densify_steps", [&](const YAML::Node& n) { c.densify_steps = n.as<int>(); }},
       {"d_base_width", [&](const YAML::Node& n) { c.d_base_width = n.as<int>(); }},
       {"d_max_width", [&](const YAML::Node& n) { c.d_max_width = n.as<int>(); }},
       {"latent_dim", [&](const YAML::Node& n) { c.latent_dim = n.as<int>(); }},
@@ -244,6 +246,7 @@ std::string P2iConfig::ToYamlString() const {
   e << YAML::Key << "densify_min_gap_m" << YAML::Value << densify_min_gap_m;
   e << YAML::Key << "densify_min_gap_deg" << YAML::Value << densify_min_gap_deg;
   e << YAML::Key << "densify_real_share" << YAML::Value << densify_real_share;
+  e << YAML::Key << "densify_steps" << YAML::Value << densify_steps;
   e << YAML::Key << "d_base_width" << YAML::Value << d_base_width;
   e << YAML::Key << "d_max_width" << YAML::Value << d_max_width;
   e << YAML::Key << "latent_dim" << YAML::Value << latent_dim;

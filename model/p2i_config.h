@@ -87,6 +87,11 @@ struct P2iConfig {
   /// of each batch real however many views densify_ratio adds, so a dense capture's frames are
   /// not seen a quarter as often at ratio 3. In [0, 1).
   double densify_real_share = 0.0;
+  /// Phase-1 steps whose batches may hold densified views (-1 = every step of both phases). From
+  /// phase-1 step densify_steps on, and through all of phase 2 (ENET), batches come from the
+  /// captured frames only: the views teach G the geometry off the captured path, the last steps
+  /// fit the captured frames' look. E.g. 5000 of 7000 phase-1 steps.
+  int densify_steps = -1;
 
   // --- optimisation ---
   int batch_size = 16;

@@ -389,8 +389,12 @@ torch::Tensor TrainingRun::BatchIndices(int phase, int step) const {
   d.batch_size = config_.batch_size;
   d.world = dp_ ? dp_->WorldSize() : 1;
   d.rank = dp_ ? dp_->Rank() : 0;
-  // Share 0 (or no densified frames): DrawMixedBatch is the uniform DrawBatch over all frames.
-  return torch::tensor(DrawMixedBatch(d, captured_, densified_, config_.densify_real_share), torch::kLong);
+  // Past densify_steps (phase 1's G/D batches, 100 + k its extra D ones) and in phase 2: captured
+  // frames only. Share 0 (or no densified frames): the uniform DrawBatch over all frames.
+  const bool captured_only =
+      config_.densify_steps >= 0 && (phase == 2 || step >= config_.densify_steps);
+  const double share = captured_only ? 1.0 : config_.densify_real_share;
+  return torch::tensor(DrawMixedBatch(d, captured_, densified_, share), torch::kLong);
 }
 
 // The divergence guard on one loss. One process: throws Divergence at once. Data-parallel: the
@@ -742,6 +746,7 @@ void TrainingRun::LogStart(const scene::RgbdDataset& train, const std::string& w
        {"train_frames", train.frames.size()},
        {"densified_frames", densified_.size()},
        {"densify_real_share", config_.densify_real_share},
+       {"densify_steps", config_.densify_steps},
        {"val_frames", val_.rgb.size()},
        {"threads", options_.threads},
        {"mean_image_val_psnr", mean_psnr}});

@@ -241,6 +241,12 @@ TEST_CASE("densify keys: read from YAML, written back, bad values name the key",
             .densify_real_share == 0.5);
   CHECK_THROWS_WITH(P2iConfig::FromYamlString("densify_real_share: 1\n", "t"),
                     Catch::Contains("densify_real_share must be in [0, 1)"));
+  CHECK(P2iConfig{}.densify_steps == -1);  // densified views in every step unless a config asks
+  CHECK(P2iConfig::FromYamlString(P2iConfig::FromYamlString("densify_steps: 5000\n", "t").ToYamlString(),
+                                  "t")
+            .densify_steps == 5000);
+  CHECK_THROWS_WITH(P2iConfig::FromYamlString("densify_steps: -2\n", "t"),
+                    Catch::Contains("densify_steps must be >= -1"));
 }
 
 }  // namespace

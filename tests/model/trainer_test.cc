@@ -10,6 +10,7 @@
 #include <torch/torch.h>
 
 #include "model/checkpoint.h"
+#include "model/densify.h"
 #include "model/p2i_synthesizer.h"
 #include "model/pose_dependence.h"
 #include "model/procedural_dataset.h"
@@ -201,11 +202,12 @@ TEST_CASE("validation logs the pose-dependence score, and recon_weight, fourier 
 }
 
 // The mean grey level the CNN baseline renders over `data`'s poses after `steps` steps with
-// densify_real_share `share`.
+// densify_real_share `share` and densify_steps `densify_steps`.
 double MeanGreyAfterTraining(const p2i::scene::RgbdDataset& data, double share, int steps,
-                             const std::string& dir) {
+                             const std::string& dir, int densify_steps = -1) {
   auto c = TinyConfig("cnn_baseline");
   c.densify_real_share = share;
+  c.densify_steps = densify_steps;
   c.lr_g = 1e-2;  // a few steps reach the L2 optimum, the batches' mean image
   c.Validate();
   const auto report = Trainer(c, Quiet(dir, steps)).Run(data, data);
@@ -217,15 +219,21 @@ double MeanGreyAfterTraining(const p2i::scene::RgbdDataset& data, double share, 
   return sum / static_cast<double>(data.frames.size());
 }
 
-TEST_CASE("densify_real_share sets the captured frames' share of what the model learns", "[unit]") {
-  // 4 captured white frames and 12 densified black ones: drawn uniformly (share off) a quarter
-  // of each batch is white; with share 0.9 nine tenths are. The CNN's L2 optimum follows.
+// 16 frames: 4 captured ones all white, 12 densified ones (model/densify.h ids) all black.
+p2i::scene::RgbdDataset WhiteCapturedBlackDensified() {
   auto data = MakeProceduralDataset(16, 32);
   for (size_t i = 0; i < data.frames.size(); ++i) {
     auto& f = data.frames[i];
     f.rgb.setTo(cv::Scalar::all(i % 4 == 0 ? 255 : 0));
-    if (i % 4 != 0) f.id = "densify/" + std::to_string(i);
+    if (i % 4 != 0) f.id = std::string(kDensifiedIdPrefix) + std::to_string(i);
   }
+  return data;
+}
+
+TEST_CASE("densify_real_share sets the captured frames' share of what the model learns", "[unit]") {
+  // 4 captured white frames and 12 densified black ones: drawn uniformly (share off) a quarter
+  // of each batch is white; with share 0.9 nine tenths are. The CNN's L2 optimum follows.
+  const auto data = WhiteCapturedBlackDensified();
   const auto dir_off = TempDir("share_off"), dir_on = TempDir("share_on");
   const double off = MeanGreyAfterTraining(data, 0.0, 60, dir_off);
   const double on = MeanGreyAfterTraining(data, 0.9, 60, dir_on);
@@ -237,6 +245,22 @@ TEST_CASE("densify_real_share sets the captured frames' share of what the model 
   CHECK(log.find("\"densify_real_share\":0.9") != std::string::npos);
   fs::remove_all(dir_off);
   fs::remove_all(dir_on);
+}
+
+TEST_CASE("densify_steps ends the densified views' part in the batches at that step", "[unit]") {
+  // As above: 4 captured white frames, 12 densified black ones. Densified views in every step,
+  // the L2 optimum is a quarter white; with densify_steps 30 of 60 the last 30 steps see the
+  // white captured frames only and the CNN ends near white.
+  const auto data = WhiteCapturedBlackDensified();
+  const auto dir_all = TempDir("dsteps_all"), dir_30 = TempDir("dsteps_30");
+  const double all = MeanGreyAfterTraining(data, 0.0, 60, dir_all, -1);
+  const double until30 = MeanGreyAfterTraining(data, 0.0, 60, dir_30, 30);
+  INFO("mean grey: densified throughout " << all << ", until step 30 " << until30);
+  CHECK(all < 128);
+  CHECK(until30 > 200);
+  CHECK(ReadFile(dir_30 + "/train_log.jsonl").find("\"densify_steps\":30") != std::string::npos);
+  fs::remove_all(dir_all);
+  fs::remove_all(dir_30);
 }
 
 TEST_CASE("the synthesizer renders RGB-D in metres with invalid depth 0", "[unit]") {
