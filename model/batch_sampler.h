@@ -25,8 +25,9 @@ std::vector<int64_t> DrawBatch(const BatchDraw& d, int64_t n);
 
 /// Indices with a share of captured frames (P2iConfig::densify_real_share): each entry comes
 /// from `captured` with probability `real_share`, else from `densified`, uniform within each
-/// (real_share 1: captured frames only, as past P2iConfig::densify_steps). Falls back to DrawBatch over captured.size() + densified.size() frames when either list is
-/// empty or real_share is 0.
+/// (real_share 1: captured frames only, as past P2iConfig::densify_steps). Falls back to
+/// DrawBatch over captured.size() + densified.size() frames when either list is empty or
+/// real_share is 0.
 std::vector<int64_t> DrawMixedBatch(const BatchDraw& d, const std::vector<int64_t>& captured,
                                     const std::vector<int64_t>& densified, double real_share);
 

@@ -67,6 +67,14 @@ TEST_CASE("DrawMixedBatch keeps the captured share and draws from both lists", "
   CHECK(real / 4000.0 == Approx(0.25).margin(0.03));
   CHECK(DrawMixedBatch(Draw(7), captured, densified, 0.5) ==
         DrawMixedBatch(Draw(7), captured, densified, 0.5));
+  // Share 1 (past densify_steps): captured frames only, across the whole list.
+  std::set<int64_t> seen_at_1;
+  for (int step = 0; step < 500; ++step)
+    for (int64_t i : DrawMixedBatch(Draw(step), captured, densified, 1.0)) {
+      CHECK(is_captured.count(i) == 1);
+      seen_at_1.insert(i);
+    }
+  CHECK(seen_at_1.size() == captured.size());
 }
 
 TEST_CASE("DrawMixedBatch without a share or without densified frames is DrawBatch", "[unit]") {
