@@ -112,6 +112,7 @@ std::string CheckpointMeta::ToJson() const {
   j["depth_max"] = config.depth_max;
   j["pose_t_min"] = normalizer.t_min;
   j["pose_t_max"] = normalizer.t_max;
+  j["pose_q_ref"] = normalizer.q_ref;
   j["camera"] = CameraToJson(camera);
   j["phase1_step"] = phase1_step;
   j["phase2_step"] = phase2_step;
@@ -131,6 +132,9 @@ CheckpointMeta CheckpointMeta::FromJson(const std::string& text, const std::stri
     m.config = P2iConfig::FromYamlString(j.at("config_yaml").get<std::string>(), source);
     m.normalizer.t_min = j.at("pose_t_min").get<std::array<double, 3>>();
     m.normalizer.t_max = j.at("pose_t_max").get<std::array<double, 3>>();
+    // Absent in checkpoints written before it: identity, the qw >= 0 sign they were trained on.
+    if (j.contains("pose_q_ref"))
+      m.normalizer.q_ref = j.at("pose_q_ref").get<std::array<double, 4>>();
     m.camera = CameraFromJson(j.at("camera"));
     m.phase1_step = j.at("phase1_step").get<int>();
     m.phase2_step = j.at("phase2_step").get<int>();

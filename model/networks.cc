@@ -49,14 +49,44 @@ PoseNormalizer PoseNormalizer::FromPoses(const std::vector<std::array<double, 7>
     n.t_min[a] = lo - margin;
     n.t_max[a] = hi + margin;
   }
+  n.q_ref = PrincipalRotation(poses);
   return n;
+}
+
+std::array<double, 4> PoseNormalizer::PrincipalRotation(
+    const std::vector<std::array<double, 7>>& poses) {
+  std::array<double, 4> q{0, 0, 0, 1};
+  if (poses.empty()) return q;
+  double m[4][4] = {};
+  for (const auto& p : poses)
+    for (int i = 0; i < 4; ++i)
+      for (int j = 0; j < 4; ++j) m[i][j] += p[3 + i] * p[3 + j];
+  // Power iteration on the positive semi-definite scatter matrix, from the first rotation (it
+  // has a component along the dominant eigenvector unless that one is orthogonal to every q_i).
+  for (int i = 0; i < 4; ++i) q[i] = poses[0][3 + i];
+  for (int it = 0; it < 200; ++it) {
+    std::array<double, 4> next{};
+    for (int i = 0; i < 4; ++i)
+      for (int j = 0; j < 4; ++j) next[i] += m[i][j] * q[j];
+    double norm = 0;
+    for (double v : next) norm += v * v;
+    norm = std::sqrt(norm);
+    if (norm < 1e-12) return {0, 0, 0, 1};
+    for (int i = 0; i < 4; ++i) q[i] = next[i] / norm;
+  }
+  if (q[3] < 0)
+    for (double& v : q) v = -v;
+  return q;
 }
 
 std::array<float, 7> PoseNormalizer::Normalize(const std::array<double, 7>& pose) const {
   std::array<float, 7> out{};
   for (int a = 0; a < 3; ++a)
     out[a] = static_cast<float>(2.0 * (pose[a] - t_min[a]) / (t_max[a] - t_min[a]) - 1.0);
-  for (int a = 3; a < 7; ++a) out[a] = static_cast<float>(pose[a]);
+  double dot = 0;
+  for (int i = 0; i < 4; ++i) dot += pose[3 + i] * q_ref[i];
+  const double sign = dot < 0 ? -1.0 : 1.0;
+  for (int a = 3; a < 7; ++a) out[a] = static_cast<float>(sign * pose[a]);
   return out;
 }
 

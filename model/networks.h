@@ -17,13 +17,26 @@
 namespace p2i::model {
 
 /// Maps poses to the normalised 7-vector the networks see: translation to [-1, 1] per axis over
-/// the training set's bounds (with a 5% margin), the unit quaternion (qw >= 0) unchanged.
-/// A value type saved with every checkpoint.
+/// the training set's bounds (with a 5% margin), the unit quaternion with the sign that puts it
+/// on q_ref's side (q and -q are the same rotation). A value type saved with every checkpoint.
+///
+/// Why q_ref: the canonical sign qw >= 0 (scene::Pose) flips the whole quaternion where qw
+/// crosses 0, i.e. for rotations near 180 deg from the world frame. A capture that looks that
+/// way (the study-room data: qw within 0.015 of 0, 11 of 50 frames flipped) would hand the
+/// networks two far-apart inputs (distance ~2) for rotations a degree apart. Measured against
+/// the training set's principal rotation instead, the sign flips only 180 deg away from it.
 struct PoseNormalizer {
   std::array<double, 3> t_min{-1, -1, -1};
   std::array<double, 3> t_max{1, 1, 1};
-  /// Bounds of `poses` (rows of 7: tx ty tz qx qy qz qw).
+  /// Reference rotation (qx qy qz qw). Identity = the plain qw >= 0 sign (checkpoints written
+  /// before q_ref existed load with it, so they see the inputs they were trained on).
+  std::array<double, 4> q_ref{0, 0, 0, 1};
+  /// Bounds and principal rotation of `poses` (rows of 7: tx ty tz qx qy qz qw).
   static PoseNormalizer FromPoses(const std::vector<std::array<double, 7>>& poses);
+  /// The principal rotation of `poses`: the unit quaternion q maximising sum_i (q . q_i)^2
+  /// (the dominant eigenvector of sum_i q_i q_i^T, Markley et al. 2007), so the sign of each
+  /// q_i does not matter; returned with qw >= 0. Identity for no poses.
+  static std::array<double, 4> PrincipalRotation(const std::vector<std::array<double, 7>>& poses);
   std::array<float, 7> Normalize(const std::array<double, 7>& pose) const;
 };
 

@@ -272,7 +272,9 @@ CheckpointMeta TrainingRun::LoadRollbackPoint() {
 // (the trainer node's ranks hold disjoint shards; `p2i train`'s ranks read the same data, for
 // which nothing changes). The translation bounds are all-reduced (the minima, and the negated
 // maxima, by MIN); FromPoses of the two corner poses is FromPoses of the union of the ranks'
-// frames, margin included.
+// frames, margin included. The reference rotation (PoseNormalizer::q_ref) is rank 0's principal
+// rotation, broadcast: a sum over the ranks is not needed for a sign reference, only that every
+// rank uses the same one.
 void TrainingRun::ShareNormalizer(const scene::RgbdDataset& train, bool fresh) {
   if (!dp_) return;
   dp_->Agree(fresh ? 1 : 0, "a fresh start (no checkpoint to resume, no --init-from)");
@@ -289,6 +291,18 @@ void TrainingRun::ShareNormalizer(const scene::RgbdDataset& train, bool fresh) {
   const std::array<double, 7> lo{bounds[0], bounds[1], bounds[2], 0, 0, 0, 1};
   const std::array<double, 7> hi{-bounds[3], -bounds[4], -bounds[5], 0, 0, 0, 1};
   meta_.normalizer = PoseNormalizer::FromPoses({lo, hi});
+  std::vector<std::array<double, 7>> poses;
+  for (const auto& f : train.frames) poses.push_back(PoseArray(f.pose));
+  std::array<double, 4> q_ref = PoseNormalizer::PrincipalRotation(poses);
+  std::string bytes(sizeof(q_ref), '\0');
+  std::memcpy(bytes.data(), q_ref.data(), sizeof(q_ref));
+  bytes = dp_->BroadcastBytes(bytes, "rank 0's principal rotation of its frames");
+  if (bytes.size() != sizeof(q_ref))
+    throw std::runtime_error("data-parallel start: rank 0's principal rotation has " +
+                             std::to_string(bytes.size()) + " bytes, expected " +
+                             std::to_string(sizeof(q_ref)));
+  std::memcpy(q_ref.data(), bytes.data(), sizeof(q_ref));
+  meta_.normalizer.q_ref = q_ref;
 }
 
 // Between backward() and step(): the gradients' mean over the ranks, and their common verdict

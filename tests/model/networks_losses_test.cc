@@ -304,3 +304,58 @@ TEST_CASE("G step with D frozen (FrozenScope): the same G gradients, no D weight
   for (size_t i = 0; i < plain.size(); ++i) CHECK(torch::allclose(plain[i], frozen[i], 1e-5, 1e-6));
   for (const auto& p : d->parameters()) CHECK(p.requires_grad());  // restored
 }
+
+namespace {
+
+// A pose at the origin rotated by `deg` degrees about z, as scene::Pose stores it (qw >= 0).
+std::array<double, 7> YawPose(double deg) {
+  const double h = 0.5 * deg * M_PI / 180.0;
+  double qz = std::sin(h), qw = std::cos(h);
+  if (qw < 0) qz = -qz, qw = -qw;
+  return {0, 0, 0, 0, 0, qz, qw};
+}
+
+double Distance(const std::array<float, 7>& a, const std::array<float, 7>& b) {
+  double s = 0;
+  for (int i = 0; i < 7; ++i) s += (a[i] - b[i]) * (a[i] - b[i]);
+  return std::sqrt(s);
+}
+
+}  // namespace
+
+TEST_CASE("the pose normaliser keeps rotations near 180 deg continuous", "[unit]") {
+  // A capture looking back along the world frame: yaw 170-190 deg, where the canonical qw >= 0
+  // sign flips the quaternion (the study-room data's case).
+  std::vector<std::array<double, 7>> poses;
+  for (double deg = 170; deg <= 190.001; deg += 2) poses.push_back(YawPose(deg));
+  const auto n = PoseNormalizer::FromPoses(poses);
+  // The principal rotation is the middle one, 180 deg about z (up to sign).
+  CHECK(std::abs(n.q_ref[2]) == Approx(1.0).margin(1e-6));
+  CHECK(n.q_ref[3] >= 0);
+  // Two rotations 2 deg apart on either side of 180 deg are 2 deg apart in the input too
+  // (|dq| = 2 sin(0.5 deg) ~ 0.017); with the plain sign they were ~2 apart.
+  const auto a = n.Normalize(YawPose(179)), b = n.Normalize(YawPose(181));
+  CHECK(Distance(a, b) < 0.03);
+  PoseNormalizer plain = n;
+  plain.q_ref = {0, 0, 0, 1};
+  CHECK(Distance(plain.Normalize(YawPose(179)), plain.Normalize(YawPose(181))) > 1.9);
+  // Every training rotation lands on one side.
+  for (const auto& p : poses) CHECK(n.Normalize(p)[5] * a[5] > 0);
+}
+
+TEST_CASE("the pose normaliser leaves captures away from 180 deg as the qw >= 0 sign has them",
+          "[unit]") {
+  // Rotations within 90 deg of identity: every input equals the plain normaliser's, so models
+  // trained before q_ref existed (identity q_ref) see the same inputs.
+  std::vector<std::array<double, 7>> poses;
+  for (double deg = -80; deg <= 60.001; deg += 10) {
+    auto p = YawPose(deg);
+    p[0] = deg / 100.0;
+    poses.push_back(p);
+  }
+  const auto n = PoseNormalizer::FromPoses(poses);
+  PoseNormalizer plain = n;
+  plain.q_ref = {0, 0, 0, 1};
+  for (const auto& p : poses) CHECK(Distance(n.Normalize(p), plain.Normalize(p)) == 0.0);
+  CHECK(PoseNormalizer::PrincipalRotation({}) == std::array<double, 4>{0, 0, 0, 1});
+}

@@ -33,6 +33,7 @@ TEST_CASE("checkpoint round trip keeps weights and metadata", "[unit]") {
   meta.config = c;
   meta.normalizer.t_min = {-1.5, 0.25, 2};
   meta.normalizer.t_max = {3, 4, 5};
+  meta.normalizer.q_ref = {0.5, -0.5, 0.5, 0.5};
   meta.phase1_step = 17;
   meta.phase2_step = 4;
   meta.lr_scale = 0.25;
@@ -50,9 +51,27 @@ TEST_CASE("checkpoint round trip keeps weights and metadata", "[unit]") {
   CHECK(loaded.lr_scale == 0.25);
   CHECK(loaded.normalizer.t_min[0] == -1.5);
   CHECK(loaded.normalizer.t_max[2] == 5);
+  CHECK(loaded.normalizer.q_ref == std::array<double, 4>{0.5, -0.5, 0.5, 0.5});
   CHECK(loaded.camera.fy() == 21);
   CHECK(loaded.config.ToYamlString() == c.ToYamlString());
   fs::remove_all(dir);
+}
+
+TEST_CASE("a checkpoint without a reference rotation loads with the qw >= 0 sign it was trained on",
+          "[unit]") {
+  CheckpointMeta meta;
+  meta.config = TinyConfig();
+  meta.normalizer.q_ref = {0, 0, 1, 0};
+  std::string text = meta.ToJson();
+  CHECK(CheckpointMeta::FromJson(text, "new.pt").normalizer.q_ref ==
+        std::array<double, 4>{0, 0, 1, 0});
+  const auto key = text.find("\"pose_q_ref\"");
+  REQUIRE(key != std::string::npos);
+  const auto end = text.find(']', key);
+  text.erase(key, text.find('"', end) - key);  // the key, its array and the comma after it
+  INFO(text);
+  CHECK(CheckpointMeta::FromJson(text, "old.pt").normalizer.q_ref ==
+        std::array<double, 4>{0, 0, 0, 1});
 }
 
 TEST_CASE("a checkpoint of another format version is refused with a clear message", "[unit]") {
