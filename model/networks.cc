@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include <Eigen/Eigenvalues>
+
 namespace p2i::model {
 
 namespace {
@@ -55,28 +57,16 @@ PoseNormalizer PoseNormalizer::FromPoses(const std::vector<std::array<double, 7>
 
 std::array<double, 4> PoseNormalizer::PrincipalRotation(
     const std::vector<std::array<double, 7>>& poses) {
-  std::array<double, 4> q{0, 0, 0, 1};
-  if (poses.empty()) return q;
-  double m[4][4] = {};
-  for (const auto& p : poses)
-    for (int i = 0; i < 4; ++i)
-      for (int j = 0; j < 4; ++j) m[i][j] += p[3 + i] * p[3 + j];
-  // Power iteration on the positive semi-definite scatter matrix, from the first rotation (it
-  // has a component along the dominant eigenvector unless that one is orthogonal to every q_i).
-  for (int i = 0; i < 4; ++i) q[i] = poses[0][3 + i];
-  for (int it = 0; it < 200; ++it) {
-    std::array<double, 4> next{};
-    for (int i = 0; i < 4; ++i)
-      for (int j = 0; j < 4; ++j) next[i] += m[i][j] * q[j];
-    double norm = 0;
-    for (double v : next) norm += v * v;
-    norm = std::sqrt(norm);
-    if (norm < 1e-12) return {0, 0, 0, 1};
-    for (int i = 0; i < 4; ++i) q[i] = next[i] / norm;
+  if (poses.empty()) return {0, 0, 0, 1};
+  Eigen::Matrix4d scatter = Eigen::Matrix4d::Zero();
+  for (const auto& p : poses) {
+    const Eigen::Vector4d q(p[3], p[4], p[5], p[6]);
+    scatter += q * q.transpose();
   }
-  if (q[3] < 0)
-    for (double& v : q) v = -v;
-  return q;
+  // Eigenvalues in increasing order: the last column is the dominant eigenvector (unit norm).
+  Eigen::Vector4d q = Eigen::SelfAdjointEigenSolver<Eigen::Matrix4d>(scatter).eigenvectors().col(3);
+  if (q[3] < 0) q = -q;
+  return {q[0], q[1], q[2], q[3]};
 }
 
 std::array<float, 7> PoseNormalizer::Normalize(const std::array<double, 7>& pose) const {

@@ -290,10 +290,9 @@ void TrainingRun::ShareNormalizer(const scene::RgbdDataset& train, bool fresh) {
   bounds = dp_->Min(bounds, "the pose bounds of the ranks' frames");
   const std::array<double, 7> lo{bounds[0], bounds[1], bounds[2], 0, 0, 0, 1};
   const std::array<double, 7> hi{-bounds[3], -bounds[4], -bounds[5], 0, 0, 0, 1};
+  // InitialiseState's fresh start set this rank's normaliser from its own frames: keep its q_ref.
+  std::array<double, 4> q_ref = meta_.normalizer.q_ref;
   meta_.normalizer = PoseNormalizer::FromPoses({lo, hi});
-  std::vector<std::array<double, 7>> poses;
-  for (const auto& f : train.frames) poses.push_back(PoseArray(f.pose));
-  std::array<double, 4> q_ref = PoseNormalizer::PrincipalRotation(poses);
   std::string bytes(sizeof(q_ref), '\0');
   std::memcpy(bytes.data(), q_ref.data(), sizeof(q_ref));
   bytes = dp_->BroadcastBytes(bytes, "rank 0's principal rotation of its frames");
