@@ -41,6 +41,15 @@ std::vector<int> P2iConfig::GeneratorWidths() const {
   return widths;
 }
 
+int P2iConfig::PoseInputs() const {
+  if (pose_encoding != "fourier") return 7;
+  if (fourier_bands == kAutoFourierBands)
+    throw std::logic_error("P2iConfig '" + name + "': fourier_bands is still auto; training "
+                           "chooses it from the training poses (a checkpoint's config holds "
+                           "the chosen count)");
+  return 7 * (1 + 2 * fourier_bands);
+}
+
 void P2iConfig::Validate() const {
   auto fail = [&](const std::string& what) {
     throw std::invalid_argument("P2iConfig '" + name + "': " + what);
@@ -69,7 +78,8 @@ void P2iConfig::Validate() const {
   if (g_norm != "none" && g_norm != "pixel") fail("g_norm must be none or pixel, got '" + g_norm + "'");
   if (pose_encoding != "none" && pose_encoding != "fourier")
     fail("pose_encoding must be none or fourier, got '" + pose_encoding + "'");
-  if (fourier_bands < 1 || fourier_bands > 16) fail("fourier_bands must be in [1, 16]");
+  if (fourier_bands != kAutoFourierBands && (fourier_bands < 1 || fourier_bands > 16))
+    fail("fourier_bands must be in [1, 16] or auto, got " + std::to_string(fourier_bands));
   if (!(recon_weight >= 0)) fail("recon_weight must be >= 0 (0 = off)");
   if (!(r1_gamma >= 0)) fail("r1_gamma must be >= 0 (0 = off)");
   if (!(densify_ratio >= 0 && densify_ratio <= 100)) fail("densify_ratio must be in [0, 100] (0 = off)");
@@ -116,6 +126,16 @@ YAML::Node LoadConfigMap(const std::string& text, const std::string& source) {
   return root;
 }
 
+/// `fourier_bands`: a count, or "auto" (kAutoFourierBands).
+int FourierBands(const YAML::Node& n, const std::string& source) {
+  if (n.IsScalar() && n.Scalar() == "auto") return kAutoFourierBands;
+  int bands = 0;
+  if (!YAML::convert<int>::decode(n, bands) || bands == kAutoFourierBands)
+    throw std::runtime_error("model config " + source + ": bad value for 'fourier_bands': "
+                             "expected a number in [1, 16] or auto");
+  return bands;
+}
+
 }  // namespace
 
 P2iConfig P2iConfig::FromYamlString(const std::string& text, const std::string& source) {
@@ -134,7 +154,7 @@ P2iConfig P2iConfig::FromYamlString(const std::string& text, const std::string& 
       {"g_fc_width", [&](const YAML::Node& n) { c.g_fc_width = n.as<int>(); }},
       {"g_norm", [&](const YAML::Node& n) { c.g_norm = n.as<std::string>(); }},
       {"pose_encoding", [&](const YAML::Node& n) { c.pose_encoding = n.as<std::string>(); }},
-      {"fourier_bands", [&](const YAML::Node& n) { c.fourier_bands = n.as<int>(); }},
+      {"fourier_bands", [&](const YAML::Node& n) { c.fourier_bands = FourierBands(n, source); }},
       {"recon_weight", [&](const YAML::Node& n) { c.recon_weight = n.as<double>(); }},
       {"r1_gamma", [&](const YAML::Node& n) { c.r1_gamma = n.as<double>(); }},
       {"densify_ratio", [&](const YAML::Node& n) { c.densify_ratio = n.as<double>(); }},
@@ -236,7 +256,11 @@ std::string P2iConfig::ToYamlString() const {
   e << YAML::Key << "g_fc_width" << YAML::Value << g_fc_width;
   e << YAML::Key << "g_norm" << YAML::Value << g_norm;
   e << YAML::Key << "pose_encoding" << YAML::Value << pose_encoding;
-  e << YAML::Key << "fourier_bands" << YAML::Value << fourier_bands;
+  e << YAML::Key << "fourier_bands" << YAML::Value;
+  if (fourier_bands == kAutoFourierBands)
+    e << "auto";
+  else
+    e << fourier_bands;
   e << YAML::Key << "recon_weight" << YAML::Value << recon_weight;
   e << YAML::Key << "r1_gamma" << YAML::Value << r1_gamma;
   e << YAML::Key << "densify_ratio" << YAML::Value << densify_ratio;

@@ -12,6 +12,9 @@ namespace p2i::model {
 
 /// Everything that defines a model and how it is trained. A value type (thread-compatible).
 /// Unknown YAML keys are errors. See docs/MODEL.md for how each field reads the paper.
+/// `fourier_bands: auto` in YAML (P2iConfig::fourier_bands).
+constexpr int kAutoFourierBands = 0;
+
 struct P2iConfig {
   std::string name = "p2i_net";
   /// "p2i_net" (adversarial, phases 1 and 2) or "cnn_baseline" (the same G trained by plain L2
@@ -38,6 +41,10 @@ struct P2iConfig {
   /// "none" = the 7-vector as is; "fourier" = [y, sin(2^k pi y), cos(2^k pi y)] for
   /// k = 0 .. fourier_bands - 1 (Tancik et al. 2020), 7 (1 + 2 fourier_bands) inputs.
   std::string pose_encoding = "none";
+  /// 1 .. 16, or kAutoFourierBands ("auto" in YAML): training chooses the count from how far
+  /// apart the captured training poses lie in the normalised input (model/pose_spacing.h) and
+  /// saves the chosen count in the checkpoint's config; resuming or warm-starting adopts the
+  /// checkpoint's count. A network cannot be built while it is still "auto".
   int fourier_bands = 6;
   int d_base_width = 32;         ///< D's first block width, doubling per block up to d_max_width
   int d_max_width = 512;
@@ -119,8 +126,13 @@ struct P2iConfig {
   double explode_factor = 50;  ///< a loss above factor x its running mean counts as divergence
 
   int Channels() const { return depth ? 4 : 3; }
+  /// True while the Fourier band count is still to be chosen from the training poses.
+  bool AutoFourierBands() const {
+    return pose_encoding == "fourier" && fourier_bands == kAutoFourierBands;
+  }
   /// Inputs of G's first layer: 7, or 7 (1 + 2 fourier_bands) with the Fourier encoding.
-  int PoseInputs() const { return pose_encoding == "fourier" ? 7 * (1 + 2 * fourier_bands) : 7; }
+  /// Throws std::logic_error while the band count is "auto" (AutoFourierBands()).
+  int PoseInputs() const;
   bool IsBaseline() const { return model == "cnn_baseline"; }
   /// The G width per stage that the schedule gives (4x4 first).
   std::vector<int> GeneratorWidths() const;

@@ -26,6 +26,7 @@
 #include "model/metrics.h"
 #include "model/networks.h"
 #include "model/pose_dependence.h"
+#include "model/pose_spacing.h"
 #include "scene/capture.h"
 #include "scene/image_ops.h"
 
@@ -39,6 +40,14 @@ using nlohmann::json;
 std::array<double, 7> PoseArray(const scene::Pose& p) {
   const auto v = p.ToVector7();
   return {v[0], v[1], v[2], v[3], v[4], v[5], v[6]};
+}
+
+// A fresh start's pose normaliser: the bounds and principal rotation of every training frame's
+// pose (densified views included).
+PoseNormalizer FreshNormalizer(const scene::RgbdDataset& train) {
+  std::vector<std::array<double, 7>> poses;
+  for (const auto& f : train.frames) poses.push_back(PoseArray(f.pose));
+  return PoseNormalizer::FromPoses(poses);
 }
 
 // Frames -> images in [-1, 1] (N x C x R x R), normalised poses (N x 7), and the RGB ground
@@ -133,6 +142,7 @@ class TrainingRun {
   void CheckRequest(const scene::RgbdDataset& train) const;
   std::string FindSource(CheckpointMeta* source);
   void CheckShape(const P2iConfig& a, const std::string& path, bool warm) const;
+  void ResolveFourierBands(const scene::RgbdDataset& train, bool fresh);
   void BuildNetworks();
   void InitialiseState(const std::string& warm_from, const CheckpointMeta& source,
                        const scene::RgbdDataset& train);
@@ -180,6 +190,9 @@ class TrainingRun {
   double ema_ = -1.0;
   double decay_ = 1.0;  // phase 1's learning-rate factor (config lr_decay_steps)
   Validation last_val_;
+  // fourier_bands: auto on a fresh start: the captured frames' median neighbour distance in the
+  // normalised pose input (NaN otherwise).
+  double pose_spacing_ = std::numeric_limits<double>::quiet_NaN();
   bool injected_ = false;
   bool stopped_ = false;
   std::string diverged_;  // data-parallel: this rank's divergence, decided at the next all-reduce
@@ -654,7 +667,7 @@ void TrainingRun::CheckShape(const P2iConfig& a, const std::string& path, bool w
   if (a.resolution != config_.resolution || a.Channels() != config_.Channels() ||
       a.model != config_.model || a.GeneratorWidths() != config_.GeneratorWidths() ||
       a.g_fc_width != config_.g_fc_width || a.g_norm != config_.g_norm ||
-      a.PoseInputs() != config_.PoseInputs())
+      a.pose_encoding != config_.pose_encoding || a.PoseInputs() != config_.PoseInputs())
     throw std::runtime_error("checkpoint " + path + " was trained with config '" + a.name +
                              "' of another shape (resolution, channels, model, G widths, "
                              "g_fc_width, g_norm or pose_encoding differ from '" + config_.name +
@@ -678,6 +691,9 @@ std::string TrainingRun::FindSource(CheckpointMeta* source) {
     warm_from = options_.init_from;
   }
   if (!load_ && warm_from.empty()) return warm_from;
+  // fourier_bands: auto resumes and warm-starts with the count the checkpoint was trained with.
+  if (config_.AutoFourierBands() && source->config.pose_encoding == "fourier")
+    config_.fourier_bands = source->config.fourier_bands;
   CheckShape(source->config, load_ ? checkpoint_path_ : warm_from, !warm_from.empty());
   if (load_) {  // resume: the checkpoint's config, the given schedule
     const P2iConfig schedule = config_;
@@ -689,6 +705,29 @@ std::string TrainingRun::FindSource(CheckpointMeta* source) {
     config_.checkpoint_every = schedule.checkpoint_every;
   }
   return warm_from;
+}
+
+// fourier_bands: auto on a fresh start: the band count for the captured training frames' median
+// neighbour distance in the normalised pose input (model/pose_spacing.h; densified views are
+// the method's own fill-in, not the capture's spacing). Data-parallel: rank 0's count on every
+// rank, so all build the same G (the trainer node's ranks hold disjoint shards, whose spacings
+// differ); every rank takes part in the broadcast whether or not its config says auto.
+void TrainingRun::ResolveFourierBands(const scene::RgbdDataset& train, bool fresh) {
+  if (dp_) dp_->Agree(fresh ? 1 : 0, "a fresh start (no checkpoint to resume, no --init-from)");
+  if (!fresh) return;
+  const bool choose = config_.AutoFourierBands();
+  if (choose) {
+    const PoseNormalizer norm = FreshNormalizer(train);
+    std::vector<std::array<float, 7>> inputs;
+    for (const auto& f : train.frames)
+      if (!IsDensified(f)) inputs.push_back(norm.Normalize(PoseArray(f.pose)));
+    pose_spacing_ = MedianNeighbourDistance(inputs);
+    config_.fourier_bands = FourierBandsForSpacing(pose_spacing_);
+  }
+  if (!dp_) return;
+  const std::string bytes =
+      dp_->BroadcastBytes(std::to_string(config_.fourier_bands), "rank 0's Fourier band count");
+  if (choose) config_.fourier_bands = std::stoi(bytes);
 }
 
 void TrainingRun::BuildNetworks() {
@@ -722,9 +761,7 @@ void TrainingRun::InitialiseState(const std::string& warm_from, const Checkpoint
     meta_.config = config_;
   } else {
     meta_.config = config_;
-    std::vector<std::array<double, 7>> poses;
-    for (const auto& f : train.frames) poses.push_back(PoseArray(f.pose));
-    meta_.normalizer = PoseNormalizer::FromPoses(poses);
+    meta_.normalizer = FreshNormalizer(train);
     meta_.camera = scene::CenterCropResizeCamera(train.camera, config_.resolution,
                                                  config_.resolution);
   }
@@ -760,6 +797,9 @@ void TrainingRun::LogStart(const scene::RgbdDataset& train, const std::string& w
        {"densified_frames", densified_.size()},
        {"densify_real_share", config_.densify_real_share},
        {"densify_steps", config_.densify_steps},
+       {"fourier_bands", config_.pose_encoding == "fourier" ? json(config_.fourier_bands)
+                                                            : json(nullptr)},
+       {"pose_spacing", std::isfinite(pose_spacing_) ? json(pose_spacing_) : json(nullptr)},
        {"val_frames", val_.rgb.size()},
        {"threads", options_.threads},
        {"mean_image_val_psnr", mean_psnr}});
@@ -795,11 +835,13 @@ TrainReport TrainingRun::Execute(const scene::RgbdDataset& train, const scene::R
   torch::set_num_threads(options_.threads);
   CheckpointMeta source;
   const std::string warm_from = FindSource(&source);
+  const bool fresh = !load_ && warm_from.empty();
+  dp_ = DataParallel::For(options_.distributed);
+  ResolveFourierBands(train, fresh);
   BuildNetworks();
   InitialiseState(warm_from, source, train);
-  dp_ = DataParallel::For(options_.distributed);
   if (dp_) dp_->Start(&meta_.phase1_step, &meta_.phase2_step, *nets_);  // same start everywhere
-  ShareNormalizer(train, !load_ && warm_from.empty());
+  ShareNormalizer(train, fresh);
   train_ = Prepare(train.frames, config_, meta_.normalizer, train.frames.size());
   for (size_t i = 0; i < train.frames.size(); ++i)
     (IsDensified(train.frames[i]) ? densified_ : captured_).push_back(static_cast<int64_t>(i));

@@ -2,10 +2,12 @@
 /// @brief Data-parallel `p2i train` on Gloo over loopback: two ranks give the weights of one
 /// rank with the doubled batch, also through a divergence rollback forced on one rank only; a
 /// rank killed mid-run stops the other with a clear error and an intact checkpoint, from which
-/// every rank resumes; a fresh start's pose normaliser is that of every rank's frames.
+/// every rank resumes; a fresh start's pose normaliser is that of every rank's frames, and its
+/// `fourier_bands: auto` count rank 0's.
 #include <signal.h>
 #include <unistd.h>
 
+#include <array>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -51,6 +53,39 @@ double GDifference(const P2iConfig& config, const std::string& a, const std::str
   for (size_t i = 0; i < pa.size(); ++i)
     worst = std::max(worst, (pa[i] - pb[i]).abs().mean().item<double>());
   return worst;
+}
+
+/// Two data-parallel ranks as threads of this process, rank r training on shard[r] for
+/// `steps` phase-1 steps into DIR/r<r> (master port Port() + `port_offset`); each rank's error
+/// message, empty when it finished.
+std::array<std::string, 2> TrainTwoRanksInProcess(const P2iConfig& c,
+                                                  const p2i::scene::RgbdDataset shard[2],
+                                                  const std::string& dir, int port_offset,
+                                                  int steps) {
+  DistributedOptions d;
+  d.world_size = 2;
+  d.master = "127.0.0.1:" + std::to_string(std::stoi(Port()) + port_offset);
+  d.timeout_s = 30;
+  std::array<std::string, 2> errors;
+  auto run = [&](int r) {
+    try {
+      TrainerOptions o;
+      o.out_dir = dir + "/r" + std::to_string(r);
+      o.phase = 1;
+      o.steps = steps;
+      o.threads = 1;
+      o.progress = false;
+      o.distributed = d;
+      o.distributed.rank = r;
+      Trainer(c, o).Run(shard[r], p2i::scene::RgbdDataset{});
+    } catch (const std::exception& e) {
+      errors[r] = e.what();
+    }
+  };
+  std::thread rank1(run, 1);
+  run(0);
+  rank1.join();
+  return errors;
 }
 
 }  // namespace
@@ -228,29 +263,7 @@ TEST_CASE("A data-parallel fresh start's pose normaliser is that of every rank's
       all.push_back({v[0], v[1], v[2], v[3], v[4], v[5], v[6]});
     }
   }
-  DistributedOptions d;
-  d.world_size = 2;
-  d.master = "127.0.0.1:" + std::to_string(std::stoi(Port()) + 3);
-  d.timeout_s = 30;
-  std::string errors[2];
-  auto run = [&](int r) {
-    try {
-      TrainerOptions o;
-      o.out_dir = dir + "/r" + std::to_string(r);
-      o.phase = 1;
-      o.steps = 0;
-      o.threads = 1;
-      o.progress = false;
-      o.distributed = d;
-      o.distributed.rank = r;
-      Trainer(c, o).Run(shard[r], p2i::scene::RgbdDataset{});
-    } catch (const std::exception& e) {
-      errors[r] = e.what();
-    }
-  };
-  std::thread rank1(run, 1);
-  run(0);
-  rank1.join();
+  const auto errors = TrainTwoRanksInProcess(c, shard, dir, 3, 0);
   INFO(errors[0] << " / " << errors[1]);
   REQUIRE(errors[0].empty());
   REQUIRE(errors[1].empty());
@@ -263,5 +276,27 @@ TEST_CASE("A data-parallel fresh start's pose normaliser is that of every rank's
     CHECK(got.t_max[a] == Approx(want.t_max[a]).margin(1e-12));
   }
   CHECK(got.t_max[0] > rank0_only.t_max[0] + 5.0);  // the test tells the two apart
+  fs::remove_all(dir);
+}
+
+TEST_CASE("A data-parallel fresh start with fourier_bands: auto builds rank 0's count everywhere",
+          "[integration]") {
+  // Disjoint shards of different density: on its own rank 0's 8 frames call for 4 bands and
+  // rank 1's 32 for 6 (tests/model/trainer_test.cc). Ranks that chose for themselves would
+  // build Gs of different input widths, and the start's weight broadcast would fail.
+  const auto dir = TempDir("dp_auto_bands");
+  const P2iConfig c = AutoFourierBandsConfig(TinyConfig("cnn_baseline"));
+  const p2i::scene::RgbdDataset shard[2] = {FramesOnALine(8, 0), FramesOnALine(32, 0)};
+  const auto errors = TrainTwoRanksInProcess(c, shard, dir, 4, 1);
+  INFO(errors[0] << " / " << errors[1]);
+  REQUIRE(errors[0].empty());
+  REQUIRE(errors[1].empty());
+  CHECK(ReadCheckpointMeta(dir + "/r0/checkpoint.pt").config.fourier_bands == 4);
+  for (const std::string& log : {dir + "/r0/train_log.jsonl", dir + "/r1/train_log.rank1.jsonl"}) {
+    INFO(log);
+    const std::string text = ReadFile(log);
+    const auto start = nlohmann::json::parse(text.substr(0, text.find('\n')));
+    CHECK(start.at("fourier_bands") == 4);
+  }
   fs::remove_all(dir);
 }

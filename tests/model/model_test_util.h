@@ -16,6 +16,7 @@
 #define CHECK(...) \
   INTERNAL_CATCH_TEST("CHECK", Catch::ResultDisposition::ContinueOnFailure, __VA_ARGS__)
 
+#include "model/densify.h"
 #include "model/p2i_config.h"
 #include "model/export.h"
 #include "model/procedural_dataset.h"
@@ -56,6 +57,29 @@ inline bool SameParameters(torch::nn::Module& a, torch::nn::Module& b) {
   for (const auto& kv : ba)
     if (!torch::equal(kv.value(), bb[kv.key()])) return false;
   return true;
+}
+
+/// `captured` frames on a line along x, 1 cm apart, facing one way, with `per_gap` densified
+/// views (model/densify.h ids) evenly between each pair of neighbours. Per-axis normalisation
+/// puts the captured frames 2 / ((captured - 1) 1.1) apart in the pose input (5 % margin).
+inline p2i::scene::RgbdDataset FramesOnALine(int captured, int per_gap) {
+  const int n = captured + (captured - 1) * per_gap;
+  auto data = MakeProceduralDataset(n, 32);
+  const double step = 0.01 / (per_gap + 1);
+  for (int i = 0; i < n; ++i) {
+    auto& f = data.frames[static_cast<size_t>(i)];
+    f.pose = p2i::scene::Pose(Eigen::Vector3d(step * i, 0, 0), Eigen::Quaterniond::Identity());
+    if (i % (per_gap + 1) != 0) f.id = std::string(kDensifiedIdPrefix) + std::to_string(i);
+  }
+  return data;
+}
+
+/// `c` with the Fourier pose encoding and `fourier_bands: auto`.
+inline P2iConfig AutoFourierBandsConfig(P2iConfig c) {
+  c.pose_encoding = "fourier";
+  c.fourier_bands = kAutoFourierBands;
+  c.Validate();
+  return c;
 }
 
 }  // namespace p2i::model::testing
