@@ -287,11 +287,9 @@ CheckpointMeta TrainingRun::LoadRollbackPoint() {
 // maxima, by MIN); FromPoses of the two corner poses is FromPoses of the union of the ranks'
 // frames, margin included. The reference rotation (PoseNormalizer::q_ref) is rank 0's principal
 // rotation, broadcast: a sum over the ranks is not needed for a sign reference, only that every
-// rank uses the same one.
+// rank uses the same one. That every rank starts fresh, or none, ResolveFourierBands has agreed.
 void TrainingRun::ShareNormalizer(const scene::RgbdDataset& train, bool fresh) {
-  if (!dp_) return;
-  dp_->Agree(fresh ? 1 : 0, "a fresh start (no checkpoint to resume, no --init-from)");
-  if (!fresh) return;
+  if (!dp_ || !fresh) return;
   std::vector<double> bounds(6, std::numeric_limits<double>::infinity());
   for (const auto& f : train.frames) {
     const auto p = PoseArray(f.pose);
@@ -711,7 +709,8 @@ std::string TrainingRun::FindSource(CheckpointMeta* source) {
 // neighbour distance in the normalised pose input (model/pose_spacing.h; densified views are
 // the method's own fill-in, not the capture's spacing). Data-parallel: rank 0's count on every
 // rank, so all build the same G (the trainer node's ranks hold disjoint shards, whose spacings
-// differ); every rank takes part in the broadcast whether or not its config says auto.
+// differ); every rank takes part in the broadcast whether or not its config says auto. First,
+// the ranks agree that all start fresh or none does (ShareNormalizer relies on it).
 void TrainingRun::ResolveFourierBands(const scene::RgbdDataset& train, bool fresh) {
   if (dp_) dp_->Agree(fresh ? 1 : 0, "a fresh start (no checkpoint to resume, no --init-from)");
   if (!fresh) return;

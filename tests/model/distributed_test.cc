@@ -294,9 +294,7 @@ TEST_CASE("A data-parallel fresh start with fourier_bands: auto builds rank 0's 
   CHECK(ReadCheckpointMeta(dir + "/r0/checkpoint.pt").config.fourier_bands == 4);
   for (const std::string& log : {dir + "/r0/train_log.jsonl", dir + "/r1/train_log.rank1.jsonl"}) {
     INFO(log);
-    const std::string text = ReadFile(log);
-    const auto start = nlohmann::json::parse(text.substr(0, text.find('\n')));
-    CHECK(start.at("fourier_bands") == 4);
+    CHECK(StartEvent(log).at("fourier_bands") == 4);
   }
   fs::remove_all(dir);
 }

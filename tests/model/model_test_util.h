@@ -6,6 +6,8 @@
 
 #include <string>
 
+#include <nlohmann/json.hpp>
+
 #include <catch2/catch.hpp>
 #include <torch/torch.h>
 
@@ -21,6 +23,7 @@
 #include "model/export.h"
 #include "model/procedural_dataset.h"
 #include "model/trainer.h"
+#include "tests/read_file.h"
 #include "tests/temp_dir.h"
 #include "tests/tiny_config.h"
 
@@ -72,6 +75,12 @@ inline p2i::scene::RgbdDataset FramesOnALine(int captured, int per_gap) {
     if (i % (per_gap + 1) != 0) f.id = std::string(kDensifiedIdPrefix) + std::to_string(i);
   }
   return data;
+}
+
+/// The first line of a train log (`train_log*.jsonl`): its start event.
+inline nlohmann::json StartEvent(const std::string& log_path) {
+  const std::string text = p2i::testing::ReadFile(log_path);
+  return nlohmann::json::parse(text.substr(0, text.find('\n')));
 }
 
 /// `c` with the Fourier pose encoding and `fourier_bands: auto`.

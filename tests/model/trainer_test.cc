@@ -417,8 +417,7 @@ TEST_CASE("fourier_bands: auto takes the count from the captured frames' spacing
   CHECK(CheckpointBands(rd.checkpoint_path) == 6);
   CHECK(CheckpointBands(rf.checkpoint_path) == 4);
   // The start event says what was chosen and from what spacing.
-  const auto start = nlohmann::json::parse(ReadFile(rs.log_path).substr(
-      0, ReadFile(rs.log_path).find('\n')));
+  const auto start = StartEvent(rs.log_path);
   CHECK(start.at("event") == "start");
   CHECK(start.at("fourier_bands") == 4);
   CHECK(start.at("pose_spacing").get<double>() == Approx(2.0 / (7 * 1.1)).epsilon(1e-4));
