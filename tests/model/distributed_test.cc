@@ -281,8 +281,8 @@ TEST_CASE("A data-parallel fresh start's pose normaliser is that of every rank's
 
 TEST_CASE("A data-parallel fresh start with fourier_bands: auto builds rank 0's count everywhere",
           "[integration]") {
-  // Disjoint shards of different density: on its own rank 0's 8 frames call for 4 bands and
-  // rank 1's 32 for 6 (tests/model/trainer_test.cc). Ranks that chose for themselves would
+  // Disjoint shards of different density: on its own rank 0's 8 frames call for 2 bands and
+  // rank 1's 32 for 4 (tests/model/trainer_test.cc). Ranks that chose for themselves would
   // build Gs of different input widths, and the start's weight broadcast would fail.
   const auto dir = TempDir("dp_auto_bands");
   const P2iConfig c = AutoFourierBandsConfig(TinyConfig("cnn_baseline"));
@@ -291,10 +291,10 @@ TEST_CASE("A data-parallel fresh start with fourier_bands: auto builds rank 0's 
   INFO(errors[0] << " / " << errors[1]);
   REQUIRE(errors[0].empty());
   REQUIRE(errors[1].empty());
-  CHECK(ReadCheckpointMeta(dir + "/r0/checkpoint.pt").config.fourier_bands == 4);
+  CHECK(ReadCheckpointMeta(dir + "/r0/checkpoint.pt").config.fourier_bands == 2);
   for (const std::string& log : {dir + "/r0/train_log.jsonl", dir + "/r1/train_log.rank1.jsonl"}) {
     INFO(log);
-    CHECK(StartEvent(log).at("fourier_bands") == 4);
+    CHECK(StartEvent(log).at("fourier_bands") == 2);
   }
   fs::remove_all(dir);
 }

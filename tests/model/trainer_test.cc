@@ -402,10 +402,10 @@ int CheckpointBands(const std::string& path) {
 TEST_CASE("fourier_bands: auto takes the count from the captured frames' spacing and saves it",
           "[unit]") {
   // Per-axis normalisation: n frames along x lie 2 / ((n - 1) 1.1) apart in the input
-  // (margin 5 % per side), so 8 frames: 0.26 -> 4 bands; 32 frames: 0.059 -> 6 bands.
+  // (margin 5 % per side), so 8 frames: 0.26 -> 2 bands; 32 frames: 0.059 -> 4 bands.
   const auto sparse = FramesOnALine(8, 0), dense = FramesOnALine(32, 0);
   // 8 captured frames with 3 densified views in every gap: counted, the views would make the
-  // spacing a quarter (6 bands); the capture's spacing is the captured frames'.
+  // spacing a quarter (4 bands); the capture's spacing is the captured frames'.
   const auto filled = FramesOnALine(8, 3);
   REQUIRE(filled.frames.size() == 29);
   const auto dir_s = TempDir("auto_sparse"), dir_d = TempDir("auto_dense"),
@@ -413,13 +413,13 @@ TEST_CASE("fourier_bands: auto takes the count from the captured frames' spacing
   const auto rs = Trainer(AutoBandsConfig(), Quiet(dir_s, 2)).Run(sparse, sparse);
   const auto rd = Trainer(AutoBandsConfig(), Quiet(dir_d, 2)).Run(dense, dense);
   const auto rf = Trainer(AutoBandsConfig(), Quiet(dir_f, 2)).Run(filled, filled);
-  CHECK(CheckpointBands(rs.checkpoint_path) == 4);
-  CHECK(CheckpointBands(rd.checkpoint_path) == 6);
-  CHECK(CheckpointBands(rf.checkpoint_path) == 4);
+  CHECK(CheckpointBands(rs.checkpoint_path) == 2);
+  CHECK(CheckpointBands(rd.checkpoint_path) == 4);
+  CHECK(CheckpointBands(rf.checkpoint_path) == 2);
   // The start event says what was chosen and from what spacing.
   const auto start = StartEvent(rs.log_path);
   CHECK(start.at("event") == "start");
-  CHECK(start.at("fourier_bands") == 4);
+  CHECK(start.at("fourier_bands") == 2);
   CHECK(start.at("pose_spacing").get<double>() == Approx(2.0 / (7 * 1.1)).epsilon(1e-4));
   // The saved model renders with the chosen count.
   SynthesizerOptions so;
@@ -431,12 +431,12 @@ TEST_CASE("fourier_bands: auto takes the count from the captured frames' spacing
   // Resuming with auto keeps the checkpoint's count; so does a warm start on other data.
   const auto resumed = Trainer(AutoBandsConfig(), Quiet(dir_s, 4, 1, true)).Run(sparse, sparse);
   CHECK(resumed.phase1_steps == 4);
-  CHECK(CheckpointBands(resumed.checkpoint_path) == 4);
+  CHECK(CheckpointBands(resumed.checkpoint_path) == 2);
   const auto dir_w = TempDir("auto_warm");
   auto o = Quiet(dir_w, 2);
   o.init_from = rs.checkpoint_path;
   const auto warm = Trainer(AutoBandsConfig(), o).Run(dense, dense);
-  CHECK(CheckpointBands(warm.checkpoint_path) == 4);
+  CHECK(CheckpointBands(warm.checkpoint_path) == 2);
   fs::remove_all(dir_s);
   fs::remove_all(dir_w);
 }
