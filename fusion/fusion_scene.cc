@@ -112,8 +112,8 @@ class KeyframeBlender {
  public:
   KeyframeBlender(const scene::Pose& pose, const scene::CameraInfo& camera,
                   const scene::CameraInfo& frame_camera, const BlendOptions& bo,
-                  const std::vector<Slot>& slots, int level, bool slot_planes)
-      : slots_(slots), level_(level), slot_planes_(slot_planes) {
+                  const std::vector<Slot>& slots, int level, bool slot_planes, bool keyframe_depth)
+      : slots_(slots), level_(level), slot_planes_(slot_planes), keyframe_depth_(keyframe_depth) {
     bicubic_ = bo.sampling == "bicubic" ||
                (bo.sampling == "auto" &&
                 UseBicubicRead(camera.fx(), camera.fy(), frame_camera.fx(), frame_camera.fy(), level));
@@ -130,7 +130,6 @@ class KeyframeBlender {
     floor_g_ = static_cast<float>(bo.grazing_floor);
     sigma_ = static_cast<float>(bo.angle_sigma_deg / kRadToDeg);
     far_z_ = static_cast<float>(bo.far_depth_m);
-    keyframe_depth_ = bo.depth == "keyframes";
     view_z_ = r_wc_.col(2);
   }
 
@@ -286,13 +285,13 @@ class KeyframeBlender {
   const std::vector<Slot>& slots_;
   int level_;  // the keyframes' colour pyramid level read (Slot::colour)
   bool slot_planes_;  // write ViewCandidates::colours / weights (CandidateRequest::slot_planes)
+  bool keyframe_depth_;  // the slots' own depth (BlendOptions::depth "keyframes" or its auto choice)
   Eigen::Matrix3f r_wc_;
   Eigen::Vector3f centre_, view_z_;  // view_z_: the view's optical axis in the world
   float fx_, fy_, cx_, cy_, kfx_, kfy_, kcx_, kcy_;
   int kw_, kh_;
   float vis_abs_, vis_rel_, res_w_, eps_, floor_g_, sigma_, far_z_;
   bool bicubic_ = true;
-  bool keyframe_depth_ = false;  // BlendOptions::depth "keyframes"
   std::array<float, 16> pen_{}, graze_{}, ang_{}, wgt_{}, zk_{};
   std::array<cv::Vec3f, 16> col_{};
   std::array<bool, 16> vis_{};
@@ -354,8 +353,8 @@ void BlendOptions::Validate() const {
     fail("keyframe_levels must be in [0, 6], got " + std::to_string(keyframe_levels));
   if (sampling != "auto" && sampling != "bicubic" && sampling != "bilinear")
     fail("sampling must be auto, bicubic or bilinear, got '" + sampling + "'");
-  if (depth != "raycast" && depth != "keyframes")
-    fail("depth must be raycast or keyframes, got '" + depth + "'");
+  if (depth != "raycast" && depth != "keyframes" && depth != "auto")
+    fail("depth must be raycast, keyframes or auto, got '" + depth + "'");
   if (align.iterations < 0 || align.iterations > 4)
     fail("align_iterations must be in [0, 4] (0 = off), got " + std::to_string(align.iterations));
   if (!(align.max_shift_px > 0.0 && align.max_shift_px <= 16.0))
@@ -391,6 +390,7 @@ FusionScene::FusionScene(scene::CameraInfo frame_camera, FusionSceneOptions opti
     throw std::invalid_argument("FusionScene: the frame camera needs a positive size and focal length");
   }
   if (options_.submaps.enabled()) submaps_.emplace(options_.submaps, options_.tsdf);
+  keyframe_depth_ = options_.blend.depth == "keyframes";
 }
 
 void FusionScene::Integrate(const scene::RgbdSample& frame) {
@@ -401,6 +401,10 @@ void FusionScene::Integrate(const scene::RgbdSample& frame) {
 void FusionScene::Prepare() {
   tsdf_.Prepare();
   if (submaps_) submaps_->Prepare();
+  if (options_.blend.depth == "auto") {
+    depth_choice_ = ChooseDepthSource(*this);
+    keyframe_depth_ = depth_choice_.source == "keyframes";
+  }
 }
 
 void FusionScene::RestoreSubmaps(SubmapSet submaps, std::vector<int> keyframe_submaps) {
@@ -478,7 +482,8 @@ ViewCandidates FusionScene::RenderCandidates(const scene::Pose& pose, const scen
   const bool planes = request.slot_planes || align;
   ViewCandidates c = EmptyCandidates(pose, camera, Surface(slot_keyframes, pose, camera), k, planes);
   RecordSlots(slots, k, &c);
-  KeyframeBlender blender(pose, camera, frame_camera_, options_.blend, slots, level, planes);
+  KeyframeBlender blender(pose, camera, frame_camera_, options_.blend, slots, level, planes,
+                          request.keyframe_depth.value_or(keyframe_depth_));
   BlendStats stats;
   for (int v = 0; v < camera.image_height; ++v) {
     const float* drow = c.depth.ptr<float>(v);

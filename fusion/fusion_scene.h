@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "fusion/depth_choice.h"
 #include "fusion/slot_alignment.h"
 #include "fusion/submaps.h"
 #include "fusion/tsdf_volume.h"
@@ -65,7 +66,10 @@ struct BlendOptions {
   /// The view's depth where slots see its surface: "raycast" (the default: the TSDF's surface)
   /// or "keyframes" (the blend-weighted depth of the slots' own depth maps there, each slot's
   /// measured point on its own ray taken to the view's z, as depth warp's depth is; the raycast
-  /// stays where no slot sees the surface).
+  /// stays where no slot sees the surface), or "auto": whichever of the two reproduces held-out
+  /// keyframes' own depth better (ChooseDepthSource, depth_choice.h), chosen again at every
+  /// FusionScene::Prepare. Keyframe depth wins on real sensors (a per-pixel bias shared by nearby
+  /// frames), the raycast where depth noise is zero-mean (the sim).
   std::string depth = "raycast";
   /// Edge-preserving smoothing of each keyframe's colour before the blend reads it: a 5x5
   /// bilateral filter (spatial sigma 1 px) whose colour sigma is this many 8-bit grey levels
@@ -99,6 +103,9 @@ struct CandidateRequest {
   /// without a refinement needs only the blend: false leaves each slot's two maps empty (k of them
   /// still), which saves allocating, zeroing and writing 16 bytes per slot and pixel.
   bool slot_planes = true;
+  /// Overrides the scene's depth source for this view (true: the keyframes', false: the
+  /// raycast's); unset = the scene's (BlendOptions::depth, or its auto choice).
+  std::optional<bool> keyframe_depth;
 };
 
 /// Frames arrive at any time (AddFrame); every render uses everything added so far.
@@ -120,7 +127,9 @@ class FusionScene {
   void Integrate(const scene::RgbdSample& frame);
 
   /// Builds the meshes of the global TSDF and of every submap now (TsdfVolume::Prepare), so the
-  /// first views do not pay for them. Optional.
+  /// first views do not pay for them, and with BlendOptions::depth "auto" chooses the depth source
+  /// from the keyframes added so far (depth_choice()). Optional, except that an auto scene renders
+  /// the raycast's depth until its first Prepare.
   void Prepare();
 
   /// Replaces the submaps with `submaps` (loaded from a saved version) and records the submap of
@@ -142,6 +151,11 @@ class FusionScene {
   /// was added before any frame was integrated, e.g. from a saved version).
   SubmapSet* submaps() { return submaps_ ? &*submaps_ : nullptr; }
   const std::vector<int>& keyframe_submaps() const { return keyframe_submap_; }
+  /// The last BlendOptions::depth "auto" choice (Prepare); default-constructed (raycast, 0
+  /// frames) when depth is not auto or before the first Prepare.
+  const DepthChoice& depth_choice() const { return depth_choice_; }
+  /// Whether the views carry the keyframes' depth (depth "keyframes", or auto chose it).
+  bool keyframe_depth() const { return keyframe_depth_; }
 
  private:
   /// The raycast surface of a view: the global TSDF's, or (submaps) the merged raycast of the
@@ -163,6 +177,8 @@ class FusionScene {
   /// Levels 1.. of each keyframe's depth pyramid (DepthPyramid), read by the visibility test.
   std::vector<std::vector<cv::Mat>> depth_levels_;
   std::vector<scene::Pose> poses_;
+  bool keyframe_depth_ = false;
+  DepthChoice depth_choice_;
 };
 
 }  // namespace p2i::fusion

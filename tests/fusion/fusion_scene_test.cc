@@ -218,7 +218,7 @@ TEST_CASE("FusionScene: blend depth keyframes reads the keyframes' own depth, ra
   CHECK(MedianDepthRatio(vb.depth, gt.depth) == Approx(1.015).margin(0.004));
   CHECK(cv::norm(va.blended, vb.blended, cv::NORM_INF) == 0.0);  // colour is the same either way
   CHECK_THROWS_WITH(BlendOptions::FromYaml(YAML::Load("{depth: sensor}"), "cfg.yaml"),
-                    Catch::Contains("cfg.yaml") && Catch::Contains("raycast or keyframes"));
+                    Catch::Contains("cfg.yaml") && Catch::Contains("raycast, keyframes or auto"));
 }
 
 TEST_CASE("FusionScene: keyframe_denoise smooths the colour the blend reads, not the keyframes kept", "[unit]") {
