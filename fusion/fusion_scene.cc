@@ -390,7 +390,6 @@ FusionScene::FusionScene(scene::CameraInfo frame_camera, FusionSceneOptions opti
     throw std::invalid_argument("FusionScene: the frame camera needs a positive size and focal length");
   }
   if (options_.submaps.enabled()) submaps_.emplace(options_.submaps, options_.tsdf);
-  keyframe_depth_ = options_.blend.depth == "keyframes";
 }
 
 void FusionScene::Integrate(const scene::RgbdSample& frame) {
@@ -401,10 +400,7 @@ void FusionScene::Integrate(const scene::RgbdSample& frame) {
 void FusionScene::Prepare() {
   tsdf_.Prepare();
   if (submaps_) submaps_->Prepare();
-  if (options_.blend.depth == "auto") {
-    depth_choice_ = ChooseDepthSource(*this);
-    keyframe_depth_ = depth_choice_.source == "keyframes";
-  }
+  if (options_.blend.depth == "auto") depth_choice_ = ChooseDepthSource(*this);
 }
 
 void FusionScene::RestoreSubmaps(SubmapSet submaps, std::vector<int> keyframe_submaps) {
@@ -483,7 +479,7 @@ ViewCandidates FusionScene::RenderCandidates(const scene::Pose& pose, const scen
   ViewCandidates c = EmptyCandidates(pose, camera, Surface(slot_keyframes, pose, camera), k, planes);
   RecordSlots(slots, k, &c);
   KeyframeBlender blender(pose, camera, frame_camera_, options_.blend, slots, level, planes,
-                          request.keyframe_depth.value_or(keyframe_depth_));
+                          request.keyframe_depth.value_or(keyframe_depth()));
   BlendStats stats;
   for (int v = 0; v < camera.image_height; ++v) {
     const float* drow = c.depth.ptr<float>(v);

@@ -155,7 +155,10 @@ class FusionScene {
   /// frames) when depth is not auto or before the first Prepare.
   const DepthChoice& depth_choice() const { return depth_choice_; }
   /// Whether the views carry the keyframes' depth (depth "keyframes", or auto chose it).
-  bool keyframe_depth() const { return keyframe_depth_; }
+  bool keyframe_depth() const {
+    return options_.blend.depth == "keyframes" ||
+           (options_.blend.depth == "auto" && depth_choice_.source == "keyframes");
+  }
 
  private:
   /// The raycast surface of a view: the global TSDF's, or (submaps) the merged raycast of the
@@ -177,7 +180,6 @@ class FusionScene {
   /// Levels 1.. of each keyframe's depth pyramid (DepthPyramid), read by the visibility test.
   std::vector<std::vector<cv::Mat>> depth_levels_;
   std::vector<scene::Pose> poses_;
-  bool keyframe_depth_ = false;
   DepthChoice depth_choice_;
 };
 
