@@ -2,14 +2,13 @@
 /// @brief The leave-one-out choice of a fusion view's depth source (depth_choice.h).
 #include "fusion/depth_choice.h"
 
-#include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <stdexcept>
 
 #include <opencv2/imgproc.hpp>
 
 #include "fusion/fusion_scene.h"
+#include "fusion/holdout.h"
 
 namespace p2i::fusion {
 namespace {
@@ -46,37 +45,24 @@ std::string DepthChoice::Describe() const {
 }
 
 DepthChoice ChooseDepthSource(FusionScene& scene, int max_frames, int max_width) {
-  if (max_frames < 1) throw std::invalid_argument("ChooseDepthSource: max_frames must be >= 1");
-  if (max_width < 8) throw std::invalid_argument("ChooseDepthSource: max_width must be >= 8");
+  const Holdouts held = PickHoldouts(scene, max_frames, max_width, "ChooseDepthSource");
   DepthChoice out;
-  const auto& keyframes = scene.keyframes();
-  const int n = static_cast<int>(keyframes.size());
-  if (n < 3) return out;
-  const scene::CameraInfo& full = scene.frame_camera();
-  const int w = std::min(full.image_width, max_width);
-  const int h = std::max(1, static_cast<int>(std::lround(full.image_height * static_cast<double>(w) /
-                                                         full.image_width)));
-  const scene::CameraInfo camera = w == full.image_width ? full : full.Scaled(w, h);
-  const int m = std::min(n, max_frames);
+  if (held.indices.empty()) return out;
   PairedError err;
-  for (int k = 0; k < m; ++k) {
-    const int i = std::min(n - 1, static_cast<int>((k + 0.5) * n / m));
-    const scene::RgbdSample& frame = keyframes[static_cast<size_t>(i)];
-    cv::Mat truth;
-    if (w == full.image_width)
-      truth = frame.depth;
-    else
-      cv::resize(frame.depth, truth, cv::Size(w, h), 0.0, 0.0, cv::INTER_NEAREST);
+  for (int i : held.indices) {
+    const scene::RgbdSample& frame = scene.keyframes()[static_cast<size_t>(i)];
+    const cv::Mat truth = ResizedTo(frame.depth, held.camera, cv::INTER_NEAREST);
     CandidateRequest request;
     request.exclude_keyframe = i;
     request.slot_planes = false;
+    request.align = false;  // the depth does not depend on it
     request.keyframe_depth = false;
-    const ViewCandidates ray = scene.RenderCandidates(frame.pose, camera, request);
+    const ViewCandidates ray = scene.RenderCandidates(frame.pose, held.camera, request);
     request.keyframe_depth = true;
-    const ViewCandidates kf = scene.RenderCandidates(frame.pose, camera, request);
+    const ViewCandidates kf = scene.RenderCandidates(frame.pose, held.camera, request);
     err.Add(truth, ray.depth, kf.depth);
   }
-  out.frames = m;
+  out.frames = static_cast<int>(held.indices.size());
   out.pixels = err.n;
   if (err.n == 0) return out;
   out.abs_rel_raycast = err.sum_a / static_cast<double>(err.n);

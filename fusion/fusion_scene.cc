@@ -322,7 +322,15 @@ BlendOptions BlendOptions::FromYaml(const YAML::Node& node, const std::string& s
   if (node["sampling"]) o.sampling = r.String(node["sampling"], "sampling");
   if (node["depth"]) o.depth = r.String(node["depth"], "depth");
   if (node["keyframe_levels"]) o.keyframe_levels = r.Int(node["keyframe_levels"], "keyframe_levels");
-  if (node["align_iterations"]) o.align.iterations = r.Int(node["align_iterations"], "align_iterations");
+  if (node["align_iterations"]) {
+    const YAML::Node& a = node["align_iterations"];
+    if (a.IsScalar() && a.Scalar() == "auto") {
+      o.align.automatic = true;
+      o.align.iterations = 1;
+    } else {
+      o.align.iterations = r.Int(a, "align_iterations");
+    }
+  }
   r.OptionalDouble(node, "align_max_shift_px", "blend", &o.align.max_shift_px);
   if (node["align_flow_preset"]) o.align.flow_preset = r.String(node["align_flow_preset"], "align_flow_preset");
   try {
@@ -356,7 +364,9 @@ void BlendOptions::Validate() const {
   if (depth != "raycast" && depth != "keyframes" && depth != "auto")
     fail("depth must be raycast, keyframes or auto, got '" + depth + "'");
   if (align.iterations < 0 || align.iterations > 4)
-    fail("align_iterations must be in [0, 4] (0 = off), got " + std::to_string(align.iterations));
+    fail("align_iterations must be auto or in [0, 4] (0 = off), got " + std::to_string(align.iterations));
+  if (align.automatic && align.iterations < 1)
+    fail("align_iterations auto needs at least one round to choose, got " + std::to_string(align.iterations));
   if (!(align.max_shift_px > 0.0 && align.max_shift_px <= 16.0))
     fail("align_max_shift_px must be in (0, 16], got " + std::to_string(align.max_shift_px));
   try {
@@ -401,6 +411,15 @@ void FusionScene::Prepare() {
   tsdf_.Prepare();
   if (submaps_) submaps_->Prepare();
   if (options_.blend.depth == "auto") depth_choice_ = ChooseDepthSource(*this);
+  if (options_.blend.align.automatic) align_choice_ = ChooseAlignment(*this);
+}
+
+std::string FusionScene::AutoChoices() const {
+  std::string out;
+  if (options_.blend.depth == "auto" && depth_choice_.frames > 0) out = depth_choice_.Describe();
+  if (options_.blend.align.automatic && align_choice_.frames > 0)
+    out += (out.empty() ? "" : "; ") + align_choice_.Describe();
+  return out;
 }
 
 void FusionScene::RestoreSubmaps(SubmapSet submaps, std::vector<int> keyframe_submaps) {
@@ -474,7 +493,7 @@ ViewCandidates FusionScene::RenderCandidates(const scene::Pose& pose, const scen
                                               level, request, options_.blend.metres_per_degree);
   std::vector<int> slot_keyframes;
   for (const Slot& s : slots) slot_keyframes.push_back(s.index);
-  const bool align = options_.blend.align.iterations > 0;  // aligning reads the slot planes
+  const bool align = request.align.value_or(aligned());  // aligning reads the slot planes
   const bool planes = request.slot_planes || align;
   ViewCandidates c = EmptyCandidates(pose, camera, Surface(slot_keyframes, pose, camera), k, planes);
   RecordSlots(slots, k, &c);
@@ -492,7 +511,11 @@ ViewCandidates FusionScene::RenderCandidates(const scene::Pose& pose, const scen
   c.coverage.mean_angle_deg =
       stats.blended > 0 ? stats.angle_sum / static_cast<double>(stats.blended) : 0.0;
   c.coverage.score = stats.conf_sum / n;
-  if (align) AlignSlots(options_.blend.align, &c);
+  if (align) {
+    SlotAlignmentOptions rounds = options_.blend.align;
+    rounds.iterations = std::max(1, rounds.iterations);  // a request may ask for it when it is off
+    AlignSlots(rounds, &c);
+  }
   if (!request.slot_planes) {
     for (cv::Mat& m : c.colours) m.release();
     for (cv::Mat& m : c.weights) m.release();

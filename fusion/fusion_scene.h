@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "fusion/align_choice.h"
 #include "fusion/depth_choice.h"
 #include "fusion/slot_alignment.h"
 #include "fusion/submaps.h"
@@ -78,8 +79,10 @@ struct BlendOptions {
   /// noise does not cancel: on flat surfaces SSIM's structure term pays for both. The keyframes
   /// themselves (keyframes(), the refinement's training targets) stay as captured.
   double keyframe_denoise = 0.0;
-  /// Floating textures (slot_alignment.h): YAML keys align_iterations (0 = off, the default),
-  /// align_max_shift_px and align_flow_preset.
+  /// Floating textures (slot_alignment.h): YAML keys align_iterations (0 = off, the default; or
+  /// "auto": one round where a leave-one-out on the keyframes shows it pays, ChooseAlignment in
+  /// align_choice.h, chosen again at every FusionScene::Prepare), align_max_shift_px and
+  /// align_flow_preset.
   SlotAlignmentOptions align;
   static BlendOptions FromYaml(const YAML::Node& node, const std::string& source);
   void Validate() const;
@@ -106,6 +109,9 @@ struct CandidateRequest {
   /// Overrides the scene's depth source for this view (true: the keyframes', false: the
   /// raycast's); unset = the scene's (BlendOptions::depth, or its auto choice).
   std::optional<bool> keyframe_depth;
+  /// Overrides the scene's slot alignment for this view (true: align, with the options' rounds
+  /// or one; false: not); unset = the scene's (align_iterations, or its auto choice).
+  std::optional<bool> align;
 };
 
 /// Frames arrive at any time (AddFrame); every render uses everything added so far.
@@ -154,6 +160,17 @@ class FusionScene {
   /// The last BlendOptions::depth "auto" choice (Prepare); default-constructed (raycast, 0
   /// frames) when depth is not auto or before the first Prepare.
   const DepthChoice& depth_choice() const { return depth_choice_; }
+  /// The last `align_iterations: auto` choice (Prepare); default-constructed (off, 0 frames) when
+  /// the alignment is not auto or before the first Prepare.
+  const AlignChoice& align_choice() const { return align_choice_; }
+  /// Whether the views align their slots (align_iterations > 0 and not auto, or auto chose it).
+  bool aligned() const {
+    return options_.blend.align.iterations > 0 &&
+           (!options_.blend.align.automatic || align_choice_.aligned);
+  }
+  /// What the last Prepare chose for the options set to auto, one line for logs ("depth auto:
+  /// ...; align auto: ..."), empty when none is auto or nothing was chosen yet.
+  std::string AutoChoices() const;
   /// Whether the views carry the keyframes' depth (depth "keyframes", or auto chose it).
   bool keyframe_depth() const {
     return options_.blend.depth == "keyframes" ||
@@ -181,6 +198,7 @@ class FusionScene {
   std::vector<std::vector<cv::Mat>> depth_levels_;
   std::vector<scene::Pose> poses_;
   DepthChoice depth_choice_;
+  AlignChoice align_choice_;
 };
 
 }  // namespace p2i::fusion

@@ -71,8 +71,8 @@ FusionSynthesizer::FusionSynthesizer(const scene::RgbdDataset& training, FusionO
   CheckCamera(output_camera_, "FusionSynthesizer output");
   for (const auto& f : training.frames) scene_.AddFrame(f);
   scene_.Prepare();  // the meshes belong to training, not to the first views
-  if (options_.scene.blend.depth == "auto" && scene_.depth_choice().frames > 0)
-    std::fprintf(stderr, "fusion: %s\n", scene_.depth_choice().Describe().c_str());
+  if (const std::string chosen = scene_.AutoChoices(); !chosen.empty())
+    std::fprintf(stderr, "fusion: %s\n", chosen.c_str());
 }
 
 namespace {

@@ -133,8 +133,8 @@ LoadedFusionVersion LoadFusionVersion(const std::string& dir, FusionOptions opti
     fused.RestoreSubmaps(std::move(set), m.keyframe_submaps);
   }
   fused.Prepare();  // the meshes now, in the loader's thread, not in the first view
-  if (options.scene.blend.depth == "auto" && fused.depth_choice().frames > 0)
-    std::fprintf(stderr, "fusion version %s: %s\n", dir.c_str(), fused.depth_choice().Describe().c_str());
+  if (const std::string chosen = fused.AutoChoices(); !chosen.empty())
+    std::fprintf(stderr, "fusion version %s: %s\n", dir.c_str(), chosen.c_str());
   if (!m.refine_file.empty()) out.refine_path = fs::absolute(fs::path(dir) / m.refine_file).string();
   return out;
 }

@@ -5,7 +5,9 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <map>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include <opencv2/imgproc.hpp>
@@ -68,16 +70,18 @@ int DisPreset(const std::string& name) {
 
 void AlignSlots(const SlotAlignmentOptions& options, ViewCandidates* c) {
   if (options.iterations <= 0 || c->colours.empty() || c->blended.empty()) return;
-  // One flow object and one set of buffers per thread and preset, kept between views (as
-  // SurfaceMesh::Rasterize keeps its View): DIS allocates its pyramids at the first size it sees.
-  thread_local int preset = -1;
-  thread_local cv::Ptr<cv::DISOpticalFlow> dis;
+  // One flow object per thread, preset and view size, and one set of buffers per thread, kept
+  // between views (as SurfaceMesh::Rasterize keeps its View). A DIS object must not see a second
+  // size: it keeps state from the first (OpenCV 4.6), and a view aligned after a view of another
+  // size came out different by up to 19 grey levels (test "Slot alignment: a view aligns the same
+  // after a view of another size").
+  thread_local std::map<std::tuple<int, int, int>, cv::Ptr<cv::DISOpticalFlow>> flows;
   thread_local cv::Mat flow, map_x, map_y, source, moved;
   const int wanted = DisPreset(options.flow_preset);
-  if (dis.empty() || preset != wanted) {
-    dis = cv::DISOpticalFlow::create(wanted);
-    preset = wanted;
-  }
+  const auto key = std::make_tuple(wanted, c->blended.cols, c->blended.rows);
+  if (flows.size() >= 8 && flows.count(key) == 0) flows.clear();  // a caller cycling through sizes
+  cv::Ptr<cv::DISOpticalFlow>& dis = flows[key];
+  if (dis.empty()) dis = cv::DISOpticalFlow::create(wanted);
   const float max_px = static_cast<float>(options.max_shift_px);
   for (int it = 0; it < options.iterations; ++it) {
     const cv::Mat reference = Luminance8(c->blended);

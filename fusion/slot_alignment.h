@@ -15,6 +15,9 @@ namespace p2i::fusion {
 struct SlotAlignmentOptions {
   /// Align-and-blend rounds (0 = off): each round aligns every slot to the previous round's blend.
   int iterations = 0;
+  /// `align_iterations: auto` (align_choice.h): `iterations` rounds (1) where a leave-one-out on
+  /// the keyframes shows they pay, none elsewhere; chosen at every FusionScene::Prepare.
+  bool automatic = false;
   /// Flow vectors longer than this (pixels of the view) are shortened to it: slots further off
   /// than that disagree about the surface, not about its detail.
   double max_shift_px = 3.0;

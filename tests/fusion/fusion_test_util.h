@@ -22,9 +22,12 @@ struct PlaneScene {
   double plane_z = 2.0;
   std::optional<double> patch_z;
   double patch_half = 0.2;
+  /// Angular frequency (rad/m) of the plane texture's first term: 9 by default (a smooth texture);
+  /// higher gives detail a few pixels wide, which shows misregistration between keyframes.
+  double detail = 9.0;
 
   cv::Vec3b Colour(double x, double y, bool patch) const {
-    const double a = 0.5 + 0.5 * std::sin(9.0 * x) * std::cos(7.0 * y);
+    const double a = 0.5 + 0.5 * std::sin(detail * x) * std::cos(7.0 / 9.0 * detail * y);
     const double b = 0.5 + 0.5 * std::cos(5.0 * x + 3.0 * y);
     if (patch) return cv::Vec3b(static_cast<uint8_t>(40 + 60 * b), static_cast<uint8_t>(200 * a),
                                 static_cast<uint8_t>(230));
