@@ -21,19 +21,9 @@ using testing::PlaneScene;
 
 const std::vector<double> kXs = {-0.24, -0.16, -0.08, 0.0, 0.08, 0.16, 0.24};
 
-// The keyframes are exact; the TSDF fuses their depth `scale` x too deep, as a depth sensor's
-// bias does. Each keyframe then projects its colour onto a surface that is off, so the slots of a
-// view land their detail at pixels that differ with their baselines (parallax) and the blend
-// doubles it, around the right place.
+// Seven keyframes over geometry fused `scale` x too deep (AddOverScaledGeometry).
 void AddFrames(const PlaneScene& scene, const scene::CameraInfo& cam, double scale, FusionScene* fs) {
-  for (double x : kXs) {
-    const scene::RgbdSample truth = scene.Render(At(x, 0, 0), cam);
-    scene::RgbdSample fused = truth;
-    const cv::Mat deeper = truth.depth * scale;  // a new buffer: fused shares truth's
-    fused.depth = deeper;
-    fs->Integrate(fused);
-    fs->AddFrame(truth, /*integrate=*/false);
-  }
+  testing::AddOverScaledGeometry(scene, cam, kXs, scale, fs);
 }
 
 // A visibility tolerance wide enough for the off geometry (0.5 m deeper at 2 m), so the slots

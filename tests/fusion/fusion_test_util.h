@@ -5,10 +5,12 @@
 
 #include <cmath>
 #include <optional>
+#include <vector>
 
 #include <Eigen/Geometry>
 #include <opencv2/core.hpp>
 
+#include "fusion/fusion_scene.h"
 #include "scene/camera_info.h"
 #include "scene/pose.h"
 #include "scene/rgbd_sample.h"
@@ -74,6 +76,23 @@ inline scene::Pose At(double x, double y, double z) {
 
 inline scene::CameraInfo Cam(int w, int h, double f) {
   return scene::CameraInfo::Pinhole(w, h, f, f, (w - 1) / 2.0, (h - 1) / 2.0);
+}
+
+/// Keyframes at (x, 0, 0) for each x in `xs`, their colour and depth exact, over a TSDF that fused
+/// their depth `scale` x too deep, as a depth sensor's bias does. Each keyframe then projects its
+/// colour onto a surface that is off, so the slots of a view land their detail at pixels that
+/// differ with their baselines (parallax) and the blend doubles it, around the right place. The
+/// slots colour that surface only when the visibility tolerance covers the error.
+inline void AddOverScaledGeometry(const PlaneScene& scene, const scene::CameraInfo& cam,
+                                  const std::vector<double>& xs, double scale, FusionScene* fs) {
+  for (double x : xs) {
+    const scene::RgbdSample truth = scene.Render(At(x, 0, 0), cam);
+    scene::RgbdSample fused = truth;
+    const cv::Mat deeper = truth.depth * scale;  // a new buffer: fused shares truth's
+    fused.depth = deeper;
+    fs->Integrate(fused);
+    fs->AddFrame(truth, /*integrate=*/false);
+  }
 }
 
 }  // namespace p2i::fusion::testing

@@ -148,14 +148,7 @@ TEST_CASE("Slot alignment: a view aligns the same after a view of another size",
     o.blend.visibility_abs_m = 0.6;  // the off geometry below stays visible, so slots misregister
     o.blend.align.iterations = 1;
     auto fs = std::make_unique<FusionScene>(cam, o);
-    for (double x : {-0.16, -0.08, 0.0, 0.08, 0.16}) {
-      const scene::RgbdSample truth = scene.Render(testing::At(x, 0, 0), cam);
-      scene::RgbdSample deeper = truth;
-      const cv::Mat d = truth.depth * 1.25;
-      deeper.depth = d;
-      fs->Integrate(deeper);
-      fs->AddFrame(truth, /*integrate=*/false);
-    }
+    testing::AddOverScaledGeometry(scene, cam, {-0.16, -0.08, 0.0, 0.08, 0.16}, 1.25, fs.get());
     return fs;
   };
   const auto big = testing::Cam(128, 96, 120);
