@@ -1,12 +1,12 @@
 /// @file fusion_bench.cc
 /// @brief Speed and memory of the `fusion` method (issue 12's speed targets): TSDF integration
-/// time per camera frame (against a 30 Hz camera's 33.3 ms) with blocks of 16^3 (the default) and
-/// 8^3 voxels, render time per view at 128x128 and 320x240 with the default surface (the TSDF's
-/// mesh, bicubic keyframe reads), with bilinear reads, with the raycast (hit refinement on and
-/// off), with 8^3 blocks, with submaps and alignment, study_room.yaml's configuration for real
-/// poses (row fusion_real) and with the learned
-/// refinement, and the fused scene's memory per m^3 of
-/// allocated blocks. The method is built through the method registry,
+/// time per camera frame (against a 30 Hz camera's 33.3 ms) with blocks of 16^3 and 8^3 voxels,
+/// and into the fused scene with its default options (blocks auto: 8^3 for these 640x480 frames)
+/// without and with submaps; render time per view at 128x128 and 320x240 with the default surface
+/// (the TSDF's mesh, bicubic keyframe reads), with bilinear reads, with the raycast (hit refinement
+/// on and off), with 16^3 blocks, with submaps and alignment, study_room.yaml's configuration for
+/// real poses (row fusion_real) and with the learned refinement, and the fused scene's memory per
+/// m^3 of allocated blocks. The method is built through the method registry,
 /// as `p2i bench` and the synthesizer build it; transport is not included (pipeline_bench has
 /// it). Then where a view's time goes (raycast, hit refinement, crack fill, or the mesh's z-buffer;
 /// keyframe blend), with the time to prepare the surface after the last frame (mesh extraction). Prints
@@ -146,6 +146,35 @@ nlohmann::json BenchIntegration(const p2i::scene::RgbdDataset& train, int block_
   std::printf("memory: %lld blocks, %.1f MB over %.2f m^3 of blocks = %.1f MB per m^3\n",
               static_cast<long long>(s.blocks), s.memory_bytes / 1e6, s.block_volume_m3,
               j["memory_mb_per_m3"].get<double>());
+  return j;
+}
+
+/// Median time to integrate each training frame into a fresh FusionScene with the default options
+/// (block size auto) and `submaps` frames per local submap (0 = one global TSDF), as the trainer's
+/// mapper integrates a camera frame: the global TSDF plus, with submaps, the current submap (each
+/// frame goes into both).
+nlohmann::json BenchSceneIntegration(const p2i::scene::RgbdDataset& train, int submaps) {
+  p2i::fusion::FusionSceneOptions options;
+  options.submaps.frames = submaps;
+  p2i::fusion::FusionScene scene(train.camera, options);
+  const int blocks = scene.options().tsdf.block_resolution;
+  std::vector<double> ms;
+  for (const auto& f : train.frames) {
+    const auto t0 = Clock::now();
+    scene.Integrate(f);
+    ms.push_back(Ms(t0, Clock::now()));
+  }
+  const double p50 = Median(ms);
+  nlohmann::json j;
+  j["submap_frames"] = submaps;
+  j["block_resolution"] = blocks;
+  j["frames"] = train.frames.size();
+  j["integrate_ms_p50"] = p50;
+  j["keeps_up_with_30hz"] = p50 < 1000.0 / 30.0;
+  std::printf("integration into the fused scene (default options: blocks auto = %d^3, %s): p50 %.1f "
+              "ms/frame (30 Hz budget 33.3 ms: %s)\n",
+              blocks, submaps > 0 ? ("submaps of " + std::to_string(submaps) + " frames").c_str() : "no submaps",
+              p50, p50 < 1000.0 / 30.0 ? "keeps up" : "falls behind");
   return j;
 }
 
@@ -290,8 +319,10 @@ int main(int argc, char** argv) {
     if (a.width > 0) sizes = {{a.width, a.height}};
     if (!a.stages_only) {
       if (a.row.empty()) {
-        out["integration"] = BenchIntegration(train, 16);  // TsdfOptions' default
+        out["integration"] = BenchIntegration(train, 16);  // block_resolution auto for coarse frames
         out["integration_block8"] = BenchIntegration(train, 8);
+        out["integration_scene"] = BenchSceneIntegration(train, 0);
+        out["integration_scene_submaps_20"] = BenchSceneIntegration(train, 20);
       }
       std::printf("%-26s %9s %9s %9s %9s %10s %9s %7s %6s\n", "row", "size", "p50_ms", "p99_ms", "views/s",
                   "build_ms", "observed", "psnr", "ssim");
@@ -301,7 +332,7 @@ int main(int argc, char** argv) {
                                {"blend_bilinear", "{blend: {sampling: bilinear}}"},
                                {"blend_raycast", "{tsdf: {surface: raycast}}"},
                                {"blend_raycast_no_refine", "{tsdf: {surface: raycast, refine_hits: false}}"},
-                               {"blend_block8", "{tsdf: {block_resolution: 8}}"},
+                               {"blend_block16", "{tsdf: {block_resolution: 16}}"},
                                {"submaps_10", "{submaps: {frames: 10}}"},
                                {"submaps_10_render1", "{submaps: {frames: 10, render: 1}}"},
                                {"submaps_20", "{submaps: {frames: 20}}"},

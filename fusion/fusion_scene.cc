@@ -392,9 +392,23 @@ void FusionSceneOptions::Validate() const {
   submaps.Validate();
 }
 
+namespace {
+
+/// `options`, validated, with the TSDF's auto block size resolved for the frames' camera (the
+/// global TSDF and the submaps share it).
+FusionSceneOptions Resolved(FusionSceneOptions options, const scene::CameraInfo& frames) {
+  options.Validate();
+  options.tsdf = options.tsdf.ForFrames(frames);
+  return options;
+}
+
+}  // namespace
+
 FusionScene::FusionScene(scene::CameraInfo frame_camera, FusionSceneOptions options)
-    : frame_camera_(std::move(frame_camera)), options_(options), tsdf_(options.tsdf) {
-  options_.Validate();
+    : frame_camera_(std::move(frame_camera)),
+      options_(Resolved(options, frame_camera_)),
+      tsdf_(options_.tsdf),
+      blocks_auto_(options.tsdf.block_resolution == 0) {
   if (frame_camera_.image_width <= 0 || frame_camera_.image_height <= 0 ||
       frame_camera_.fx() <= 0.0 || frame_camera_.fy() <= 0.0) {
     throw std::invalid_argument("FusionScene: the frame camera needs a positive size and focal length");
@@ -415,8 +429,9 @@ void FusionScene::Prepare() {
 }
 
 std::string FusionScene::AutoChoices() const {
-  std::string out;
-  if (options_.blend.depth == "auto" && depth_choice_.frames > 0) out = depth_choice_.Describe();
+  std::string out = blocks_auto_ ? options_.tsdf.DescribeBlockChoice(frame_camera_) : "";
+  if (options_.blend.depth == "auto" && depth_choice_.frames > 0)
+    out += (out.empty() ? "" : "; ") + depth_choice_.Describe();
   if (options_.blend.align.automatic && align_choice_.frames > 0)
     out += (out.empty() ? "" : "; ") + align_choice_.Describe();
   return out;

@@ -168,8 +168,9 @@ class FusionScene {
     return options_.blend.align.iterations > 0 &&
            (!options_.blend.align.automatic || align_choice_.aligned);
   }
-  /// What the last Prepare chose for the options set to auto, one line for logs ("depth auto:
-  /// ...; align auto: ..."), empty when none is auto or nothing was chosen yet.
+  /// What was chosen for the options set to auto, one line for logs ("blocks auto: ...; depth
+  /// auto: ...; align auto: ..."; the block size at construction, the others at the last
+  /// Prepare), empty when none is auto or nothing was chosen yet.
   std::string AutoChoices() const;
   /// Whether the views carry the keyframes' depth (depth "keyframes", or auto chose it).
   bool keyframe_depth() const {
@@ -186,6 +187,7 @@ class FusionScene {
   scene::CameraInfo frame_camera_;
   FusionSceneOptions options_;
   TsdfVolume tsdf_;
+  bool blocks_auto_;  ///< TsdfOptions::block_resolution was auto (options_ holds the choice)
   std::optional<SubmapSet> submaps_;
   std::vector<int> keyframe_submap_;
   std::vector<scene::RgbdSample> keyframes_;

@@ -170,7 +170,7 @@ TsdfOptions RaycastSurface(TsdfOptions o) {
 Open3dTsdfSynthesizer::Open3dTsdfSynthesizer(const scene::RgbdDataset& training, FusionOptions options,
                                              std::optional<scene::CameraInfo> output_camera)
     : options_(options),
-      tsdf_(RaycastSurface(options.scene.tsdf)),
+      tsdf_(RaycastSurface(options.scene.tsdf.ForFrames(training.camera))),
       frame_camera_(training.camera),
       output_camera_(output_camera ? *output_camera : training.camera) {
   CheckCamera(frame_camera_, "Open3dTsdfSynthesizer training");

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <stdexcept>
@@ -142,7 +143,10 @@ TsdfOptions TsdfOptions::FromYaml(const YAML::Node& node, const std::string& sou
               "tsdf options");
   TsdfOptions o;
   r.OptionalDouble(node, "voxel_size_m", "tsdf", &o.voxel_size_m);
-  if (node["block_resolution"]) o.block_resolution = r.Int(node["block_resolution"], "block_resolution");
+  if (node["block_resolution"]) {
+    const YAML::Node& b = node["block_resolution"];
+    o.block_resolution = b.IsScalar() && b.Scalar() == "auto" ? 0 : r.Int(b, "block_resolution");
+  }
   if (node["initial_blocks"]) o.initial_blocks = r.Int(node["initial_blocks"], "initial_blocks");
   r.OptionalDouble(node, "trunc_voxels", "tsdf", &o.trunc_voxels);
   r.OptionalDouble(node, "depth_min_m", "tsdf", &o.depth_min_m);
@@ -163,7 +167,8 @@ TsdfOptions TsdfOptions::FromYaml(const YAML::Node& node, const std::string& sou
 void TsdfOptions::Validate() const {
   auto fail = [](const std::string& what) { throw std::invalid_argument("TsdfOptions." + what); };
   if (!(voxel_size_m > 0.0) || !std::isfinite(voxel_size_m)) fail("voxel_size_m must be > 0");
-  if (block_resolution < 2 || block_resolution > 64) fail("block_resolution must be in [2, 64]");
+  if (block_resolution != 0 && (block_resolution < 2 || block_resolution > 64))
+    fail("block_resolution must be auto (0) or in [2, 64], got " + std::to_string(block_resolution));
   if (initial_blocks < 1) fail("initial_blocks must be >= 1");
   if (!(trunc_voxels >= 1.0) || !std::isfinite(trunc_voxels)) fail("trunc_voxels must be >= 1");
   if (!(depth_min_m > 0.0)) fail("depth_min_m must be > 0");
@@ -175,6 +180,26 @@ void TsdfOptions::Validate() const {
   if (threads < 1) fail("threads must be >= 1");
   if (surface != "raycast" && surface != "mesh")
     fail("surface must be raycast or mesh, got '" + surface + "'");
+}
+
+TsdfOptions TsdfOptions::ForFrames(const scene::CameraInfo& frames) const {
+  TsdfOptions o = *this;
+  if (o.block_resolution != 0) return o;
+  const double f = std::min(frames.fx(), frames.fy());
+  // The width of one pixel at the far end of the range: no wider than a voxel, and every voxel
+  // of a surface's truncation band is crossed by some ray, so small blocks leave no gaps.
+  o.block_resolution = f > 0.0 && depth_max_m / f <= voxel_size_m ? 8 : 16;
+  return o;
+}
+
+std::string TsdfOptions::DescribeBlockChoice(const scene::CameraInfo& frames) const {
+  const double f = std::min(frames.fx(), frames.fy());
+  char line[160];
+  std::snprintf(line, sizeof(line),
+                "blocks auto: %d^3 voxels (a frame pixel is %.1f cm wide at %.0f m, a voxel %.1f cm)",
+                ForFrames(frames).block_resolution, f > 0.0 ? 100.0 * depth_max_m / f : 0.0, depth_max_m,
+                100.0 * voxel_size_m);
+  return line;
 }
 
 namespace {
@@ -265,6 +290,9 @@ struct TsdfVolume::Impl {
 
 TsdfVolume::TsdfVolume(TsdfOptions options) : options_(options) {
   options_.Validate();
+  if (options_.block_resolution == 0)
+    throw std::invalid_argument("TsdfVolume: block_resolution auto must be resolved for the frames' "
+                                "camera first (TsdfOptions::ForFrames)");
   UseThreads(options_.threads);
   impl_ = std::make_unique<Impl>();
   impl_->grid = tg::VoxelBlockGrid({"tsdf", "weight", "color"},

@@ -289,7 +289,7 @@ TEST_CASE("open3d_tsdf: renders the scene and depends on the pose", "[unit]") {
   // It is Open3D's raycast (not the mesh fusion renders by default): same depth where it hit.
   TsdfOptions ray;
   ray.surface = "raycast";
-  TsdfVolume vol(ray);
+  TsdfVolume vol(ray.ForFrames(train.camera));
   for (const auto& f : train.frames) vol.Integrate(f, train.camera);
   const cv::Mat hit = vol.Raycast(a.pose, train.camera).depth;
   REQUIRE(cv::countNonZero(hit) > 0);

@@ -21,7 +21,7 @@ TEST_CASE("SubmapSet: a submap ends after its frame count and at a pose jump", "
   SubmapOptions o;
   o.frames = 3;
   o.break_m = 0.5;
-  SubmapSet set(o, TsdfOptions{});
+  SubmapSet set(o, TsdfOptions{}.ForFrames(cam));
   std::vector<int> ids;
   for (double x : {0.0, 0.05, 0.1, 0.15, 0.2, 1.0, 1.05})  // 1.0: a 0.8 m jump
     ids.push_back(set.Integrate(plane.Render(At(x, 0, 0), cam), cam));
@@ -42,9 +42,9 @@ TEST_CASE("SubmapSet: an appended (loaded) submap is closed, the next frame star
   const auto cam = Cam(40, 30, 35);
   SubmapOptions o;
   o.frames = 5;
-  TsdfVolume loaded{TsdfOptions{}};
+  TsdfVolume loaded{TsdfOptions{}.ForFrames(cam)};
   loaded.Integrate(plane.Render(At(0, 0, 0), cam), cam);
-  SubmapSet set(o, TsdfOptions{});
+  SubmapSet set(o, TsdfOptions{}.ForFrames(cam));
   set.Append(std::move(loaded), 1);
   set.Prepare();
   CHECK(set.size() == 1);
@@ -52,7 +52,7 @@ TEST_CASE("SubmapSet: an appended (loaded) submap is closed, the next frame star
   CHECK(set.Integrate(plane.Render(At(0.02, 0, 0), cam), cam) == 1);
   CHECK(set.frames_in(0) == 1);
   CHECK(set.volume(0).Stats().frames == 1);
-  CHECK_THROWS(set.Append(TsdfVolume{TsdfOptions{}}, -1));
+  CHECK_THROWS(set.Append(TsdfVolume{TsdfOptions{}.ForFrames(cam)}, -1));
 }
 
 TEST_CASE("FusionScene with submaps: keyframes know their submap, views render from them", "[unit]") {
@@ -76,7 +76,7 @@ TEST_CASE("FusionScene with submaps: keyframes know their submap, views render f
 TEST_CASE("FillMissingFrom: only the missing pixels, raycast through their rectangle", "[unit]") {
   const PlaneScene plane;
   const auto cam = Cam(40, 30, 35);
-  TsdfVolume volume{TsdfOptions{}};
+  TsdfVolume volume{TsdfOptions{}.ForFrames(cam)};
   for (double x : {0.0, 0.05}) volume.Integrate(plane.Render(At(x, 0, 0), cam), cam);
   const scene::Pose pose = At(0.02, 0, 0);
   const TsdfRaycast full = volume.Raycast(pose, cam);

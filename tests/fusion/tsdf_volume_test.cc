@@ -6,6 +6,7 @@
 #include <catch2/catch.hpp>
 #include <yaml-cpp/yaml.h>
 
+#include "fusion/fusion_scene.h"
 #include "fusion/tsdf_volume.h"
 #include "tests/fusion/fusion_test_util.h"
 
@@ -30,9 +31,10 @@ std::pair<double, double> HitsAndError(const cv::Mat& depth, const cv::Mat& expe
   return {static_cast<double>(hits) / (depth.rows * depth.cols), worst};
 }
 
-/// Options with the surface of this run of a test (both are checked).
+/// Options with the surface of this run of a test (both are checked), blocks of 16^3 voxels.
 TsdfOptions WithSurface(const std::string& surface) {
   TsdfOptions o;
+  o.block_resolution = 16;
   o.surface = surface;
   return o;
 }
@@ -106,9 +108,8 @@ TEST_CASE("TsdfVolume: a plane seen at 30 degrees is raycast where it was measur
   const auto cam = Cam(64, 48, 50);
   const Eigen::Quaterniond yaw(Eigen::AngleAxisd(30.0 * M_PI / 180.0, Eigen::Vector3d::UnitY()));
   auto at = [&](double x) { return scene::Pose(Eigen::Vector3d(x, 0, 0.4), yaw); };
-  TsdfOptions o;
+  TsdfOptions o = WithSurface("raycast");
   o.voxel_size_m = 0.01;
-  o.surface = "raycast";
   TsdfVolume vol(o);
   for (double x : {-0.02, 0.0, 0.02}) vol.Integrate(scene.Render(at(x), cam), cam);
   const scene::Pose p = at(0.01);
@@ -184,7 +185,7 @@ TEST_CASE("TsdfVolume: integration is incremental (a new frame extends what is r
 }
 
 TEST_CASE("TsdfVolume: frames of the wrong size or type are refused naming the frame", "[unit]") {
-  TsdfVolume vol;
+  TsdfVolume vol(WithSurface("mesh"));
   scene::RgbdSample f = PlaneScene().Render(At(0, 0, 0), Cam(32, 24, 30));
   f.id = "seq-01/frame-7";
   CHECK_THROWS_WITH(vol.Integrate(f, Cam(64, 48, 60)), Catch::Contains("seq-01/frame-7"));
@@ -209,7 +210,8 @@ TEST_CASE("TsdfVolume: Save and Load round trip", "[unit]") {
   TsdfVolume back = TsdfVolume::Load(path, WithSurface(surface));
   const cv::Mat a = vol.Raycast(At(0, 0, 0.1), cam).depth, b = back.Raycast(At(0, 0, 0.1), cam).depth;
   CHECK(cv::norm(a, b, cv::NORM_INF) < 1e-6);
-  CHECK_THROWS_WITH(TsdfVolume::Load((dir / "missing.npz").string()), Catch::Contains("missing.npz"));
+  CHECK_THROWS_WITH(TsdfVolume::Load((dir / "missing.npz").string(), WithSurface(surface)),
+                    Catch::Contains("missing.npz"));
   std::filesystem::remove_all(dir);
 }
 
@@ -232,6 +234,77 @@ TEST_CASE("TsdfOptions::FromYaml: reads its keys, refuses unknown keys and bad v
   CHECK(TsdfOptions::FromYaml(YAML::Load("{}"), "t.yaml").surface == "mesh");
   CHECK(TsdfOptions::FromYaml(YAML::Load("{surface: raycast}"), "t.yaml").surface == "raycast");
   CHECK_THAT(message("{surface: splat}"), Catch::Contains("t.yaml") && Catch::Contains("surface must be raycast or mesh"));
+}
+
+TEST_CASE("TsdfOptions: block_resolution auto is 8 for frames denser than the voxels, else 16", "[unit]") {
+  TsdfOptions o;
+  CHECK(o.block_resolution == 0);  // auto is the default
+  // A pixel's width at depth_max_m (5 m): 640x480 (f 525) 9.5 mm, 320x240 (f 262) 19 mm, 128x128
+  // (f 140) 36 mm, 48x36 (f 40) 125 mm, against the 2 cm voxel.
+  CHECK(o.ForFrames(Cam(640, 480, 525)).block_resolution == 8);
+  CHECK(o.ForFrames(Cam(320, 240, 262)).block_resolution == 8);
+  CHECK(o.ForFrames(Cam(128, 128, 140)).block_resolution == 16);
+  CHECK(o.ForFrames(Cam(48, 36, 40)).block_resolution == 16);
+  TsdfOptions fine = o;  // 1 cm voxels: 320x240 frames are coarser than them
+  fine.voxel_size_m = 0.01;
+  CHECK(fine.ForFrames(Cam(640, 480, 525)).block_resolution == 8);
+  CHECK(fine.ForFrames(Cam(320, 240, 262)).block_resolution == 16);
+  TsdfOptions fixed = o;
+  fixed.block_resolution = 16;
+  CHECK(fixed.ForFrames(Cam(640, 480, 525)).block_resolution == 16);  // an explicit size is kept
+  CHECK(TsdfOptions::FromYaml(YAML::Load("{block_resolution: auto}"), "t.yaml").block_resolution == 0);
+  CHECK(TsdfOptions::FromYaml(YAML::Load("{block_resolution: 12}"), "t.yaml").block_resolution == 12);
+  CHECK_THROWS_WITH(TsdfOptions::FromYaml(YAML::Load("{block_resolution: 1}"), "t.yaml"),
+                    Catch::Contains("block_resolution") && Catch::Contains("t.yaml"));
+  CHECK_THROWS_WITH(TsdfOptions::FromYaml(YAML::Load("{block_resolution: big}"), "t.yaml"),
+                    Catch::Contains("block_resolution"));
+  CHECK_THROWS_WITH(TsdfVolume(o), Catch::Contains("ForFrames"));
+  CHECK_THAT(o.DescribeBlockChoice(Cam(320, 240, 262)), Catch::Contains("8^3") && Catch::Contains("1.9 cm"));
+  // A fused scene resolves it for its frames, keeps the choice in its options and logs it.
+  FusionScene dense(Cam(320, 240, 262)), coarse(Cam(48, 36, 40));
+  CHECK(dense.options().tsdf.block_resolution == 8);
+  CHECK(dense.tsdf().options().block_resolution == 8);
+  CHECK_THAT(dense.AutoChoices(), Catch::Contains("blocks auto: 8^3"));
+  CHECK(coarse.options().tsdf.block_resolution == 16);
+  CHECK_THAT(coarse.AutoChoices(), Catch::Contains("blocks auto: 16^3"));
+  FusionSceneOptions set;
+  set.tsdf.block_resolution = 16;
+  FusionScene chosen(Cam(320, 240, 262), set);
+  CHECK(chosen.tsdf().options().block_resolution == 16);
+  CHECK(chosen.AutoChoices().empty());  // nothing was auto
+}
+
+TEST_CASE("TsdfVolume: 8^3 blocks keep the surface of dense frames at less memory, not of coarse ones",
+          "[unit]") {
+  PlaneScene scene;
+  scene.plane_z = 3.0;
+  scene.patch_z = 2.2;
+  // Dense frames (auto picks 8): the surface is the one 16^3 blocks give, in fewer bytes.
+  // Coarse frames (auto keeps 16): pixels ~7 cm apart at 3 m; 8^3 blocks (16 cm) that no
+  // pixel's truncation band reached leave holes in the surface.
+  struct Case { scene::CameraInfo cam; bool dense; };
+  for (const Case& c : {Case{Cam(320, 240, 262), true}, Case{Cam(48, 36, 40), false}}) {
+    const auto& cam = c.cam;
+    INFO(cam.image_width << "x" << cam.image_height);
+    CHECK(TsdfOptions{}.ForFrames(cam).block_resolution == (c.dense ? 8 : 16));
+    TsdfOptions o8 = WithSurface("mesh"), o16 = WithSurface("mesh");
+    o8.block_resolution = 8;
+    TsdfVolume v8(o8), v16(o16);
+    for (double x : {-0.2, -0.1, 0.0, 0.1, 0.2})
+      for (TsdfVolume* v : {&v8, &v16}) v->Integrate(scene.Render(At(x, 0.03 * x, 0), cam), cam);
+    const scene::Pose p = At(0.05, -0.04, 0.1);
+    const cv::Mat truth = scene.Render(p, cam).depth;
+    const auto [hits8, worst8] = HitsAndError(v8.Raycast(p, cam).depth, truth);
+    const auto [hits16, worst16] = HitsAndError(v16.Raycast(p, cam).depth, truth);
+    INFO("hits 8^3 " << hits8 << ", 16^3 " << hits16 << "; memory " << v8.Stats().memory_bytes << " / "
+                     << v16.Stats().memory_bytes);
+    if (c.dense) {
+      CHECK(hits8 > hits16 - 0.002);
+      CHECK(v8.Stats().memory_bytes < 0.9 * v16.Stats().memory_bytes);  // measured 0.81
+    } else {
+      CHECK(hits8 < hits16 - 0.02);
+    }
+  }
 }
 
 }  // namespace
