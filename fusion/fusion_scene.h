@@ -128,8 +128,9 @@ class FusionScene {
   /// naming the frame when its images do not match the frame camera.
   bool AddFrame(const scene::RgbdSample& frame, bool integrate = true);
 
-  /// Integrates the frame into the TSDF (and the current submap) without keeping it as a
-  /// keyframe. A keyframe added next with AddFrame(frame, false) belongs to that submap.
+  /// Integrates the frame into the TSDF (and the current submap, on a second thread at the same
+  /// time) without keeping it as a keyframe. A keyframe added next with AddFrame(frame, false)
+  /// belongs to that submap.
   void Integrate(const scene::RgbdSample& frame);
 
   /// Builds the meshes of the global TSDF and of every submap now (TsdfVolume::Prepare), so the

@@ -73,6 +73,39 @@ TEST_CASE("FusionScene with submaps: keyframes know their submap, views render f
   CHECK(plain.submaps() == nullptr);
 }
 
+TEST_CASE("FusionScene with submaps: the submap integrates beside the global TSDF, as if one after the other",
+          "[unit]") {
+  PlaneScene plane;
+  plane.patch_z = 1.5;
+  const auto cam = Cam(64, 48, 55);
+  FusionSceneOptions o;
+  o.submaps.frames = 3;
+  FusionScene scene(cam, o);
+  TsdfVolume global(o.tsdf.ForFrames(cam));
+  SubmapSet submaps(o.submaps, o.tsdf.ForFrames(cam));
+  for (int i = 0; i < 8; ++i) {
+    const scene::RgbdSample f = plane.Render(At(0.04 * i, 0.01 * i, 0), cam);
+    scene.Integrate(f);
+    global.Integrate(f, cam);
+    submaps.Integrate(f, cam);
+  }
+  REQUIRE(scene.submaps()->size() == submaps.size());
+  const scene::Pose p = At(0.13, 0.02, 0.05);
+  CHECK(cv::norm(scene.tsdf().Raycast(p, cam).depth, global.Raycast(p, cam).depth, cv::NORM_INF) == 0.0);
+  for (size_t m = 0; m < submaps.size(); ++m) {
+    INFO("submap " << m);
+    CHECK(scene.submaps()->frames_in(m) == submaps.frames_in(m));
+    CHECK(cv::norm(scene.submaps()->Raycast({static_cast<int>(m)}, p, cam).depth,
+                   submaps.Raycast({static_cast<int>(m)}, p, cam).depth, cv::NORM_INF) == 0.0);
+  }
+  // A frame neither volume takes is refused, naming it, and leaves the scene usable.
+  scene::RgbdSample bad = plane.Render(At(0, 0, 0), Cam(32, 24, 30));
+  bad.id = "seq-01/frame-9";
+  CHECK_THROWS_WITH(scene.Integrate(bad), Catch::Contains("seq-01/frame-9"));
+  scene.Integrate(plane.Render(At(0.1, 0, 0), cam));
+  CHECK(scene.tsdf().Stats().frames == 9);
+}
+
 TEST_CASE("FillMissingFrom: only the missing pixels, raycast through their rectangle", "[unit]") {
   const PlaneScene plane;
   const auto cam = Cam(40, 30, 35);
