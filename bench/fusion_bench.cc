@@ -344,6 +344,8 @@ int main(int argc, char** argv) {
                                {"submaps_20_align_1", "{submaps: {frames: 20}, blend: {align_iterations: 1}}"},
                                // study_room.yaml's fusion_real: the configuration for real poses
                                {"fusion_real", "{submaps: {frames: 20}, blend: {align_iterations: 1, depth: keyframes}}"},
+                               // the same with alignment and depth chosen from the keyframes (both off on the sim)
+                               {"fusion_real_auto", "{submaps: {frames: 20}, blend: {align_iterations: auto, depth: auto}}"},
                                {"live_blend", "{}", true},
                                {"live_blend_full_res_reads", "{blend: {keyframe_levels: 0}}", true},
                                {"live_blend_bicubic", "{blend: {sampling: bicubic}}", true}};
