@@ -27,8 +27,17 @@ TEST_CASE("SubmapSet: a submap ends after its frame count and at a pose jump", "
     ids.push_back(set.Integrate(plane.Render(At(x, 0, 0), cam), cam));
   CHECK(ids == std::vector<int>{0, 0, 0, 1, 1, 2, 2});
   CHECK(set.size() == 3);
+  // A frame of another size is refused, naming it, before it can start a submap: the next frame
+  // still ends submap 2 at its frame count (it would start submap 3 after an empty one otherwise).
+  scene::RgbdSample bad = plane.Render(At(3.0, 0, 0), Cam(20, 15, 18));
+  bad.id = "seq-02/frame-4";
+  CHECK_THROWS_WITH(set.Integrate(bad, cam), Catch::Contains("seq-02/frame-4"));
+  CHECK(set.size() == 3);
+  CHECK(set.Integrate(plane.Render(At(1.1, 0, 0), cam), cam) == 2);
+  CHECK(set.size() == 3);
+  CHECK(set.frames_in(2) == 3);
   CHECK(set.frames_in(1) == 2);
-  CHECK(set.Stats().frames == 7);
+  CHECK(set.Stats().frames == 8);
   // The merged raycast takes the first listed submap with a surface; unknown indices are skipped.
   cv::Mat from;
   const TsdfRaycast r = set.Raycast({7, 2, 0}, At(1.0, 0, 0), cam, &from);
