@@ -114,20 +114,27 @@ void MakeData(const Args& a, const p2i::scene::SimScene& sim, p2i::scene::RgbdDa
     test->push_back(second[i].pose);
 }
 
-/// Median integration time of each training frame into a fresh TSDF (default options: 2 cm), and
-/// the volume's memory afterwards.
+/// Median time of `integrate(frame)` over the training frames, in order (ms).
+template <typename Integrate>
+double MedianIntegrationMs(const p2i::scene::RgbdDataset& train, Integrate integrate) {
+  std::vector<double> ms;
+  for (const auto& f : train.frames) {
+    const auto t0 = Clock::now();
+    integrate(f);
+    ms.push_back(Ms(t0, Clock::now()));
+  }
+  return Median(ms);
+}
+
+/// Median integration time of each training frame into a fresh TSDF (2 cm voxels, blocks of
+/// `block_resolution`^3), and the volume's memory afterwards.
 nlohmann::json BenchIntegration(const p2i::scene::RgbdDataset& train, int block_resolution) {
   p2i::fusion::TsdfOptions options;
   options.block_resolution = block_resolution;
   p2i::fusion::TsdfVolume tsdf(options);
-  std::vector<double> ms;
-  for (const auto& f : train.frames) {
-    const auto t0 = Clock::now();
-    tsdf.Integrate(f, train.camera);
-    ms.push_back(Ms(t0, Clock::now()));
-  }
+  const double p50 =
+      MedianIntegrationMs(train, [&](const p2i::scene::RgbdSample& f) { tsdf.Integrate(f, train.camera); });
   const p2i::fusion::TsdfStats s = tsdf.Stats();
-  const double p50 = Median(ms);
   const bool keeps_up = p50 < 1000.0 / 30.0;
   nlohmann::json j;
   j["frame_size"] = std::to_string(train.camera.image_width) + "x" + std::to_string(train.camera.image_height);
@@ -158,13 +165,7 @@ nlohmann::json BenchSceneIntegration(const p2i::scene::RgbdDataset& train, int s
   options.submaps.frames = submaps;
   p2i::fusion::FusionScene scene(train.camera, options);
   const int blocks = scene.options().tsdf.block_resolution;
-  std::vector<double> ms;
-  for (const auto& f : train.frames) {
-    const auto t0 = Clock::now();
-    scene.Integrate(f);
-    ms.push_back(Ms(t0, Clock::now()));
-  }
-  const double p50 = Median(ms);
+  const double p50 = MedianIntegrationMs(train, [&](const p2i::scene::RgbdSample& f) { scene.Integrate(f); });
   nlohmann::json j;
   j["submap_frames"] = submaps;
   j["block_resolution"] = blocks;
@@ -295,6 +296,43 @@ nlohmann::json BenchStages(const p2i::scene::RgbdDataset& train, const std::vect
   return out;
 }
 
+/// One render row: fusion options (YAML) under a label; live rows keep the keyframes at 640x480 as
+/// the trainer's mapper keeps them (BenchRender).
+struct Row {
+  std::string label, options;
+  bool live = false;
+};
+
+/// The render rows, with the refined row when --net is given, or only the --row one.
+std::vector<Row> RenderRows(const Args& a) {
+  std::vector<Row> rows = {{"blend (mesh)", "{}"},
+                           {"blend_bilinear", "{blend: {sampling: bilinear}}"},
+                           {"blend_raycast", "{tsdf: {surface: raycast}}"},
+                           {"blend_raycast_no_refine", "{tsdf: {surface: raycast, refine_hits: false}}"},
+                           {"blend_block16", "{tsdf: {block_resolution: 16}}"},
+                           {"submaps_10", "{submaps: {frames: 10}}"},
+                           {"submaps_10_render1", "{submaps: {frames: 10, render: 1}}"},
+                           {"submaps_20", "{submaps: {frames: 20}}"},
+                           {"submaps_20_render1", "{submaps: {frames: 20, render: 1}}"},
+                           {"align_1", "{blend: {align_iterations: 1}}"},
+                           {"align_1_fast", "{blend: {align_iterations: 1, align_flow_preset: fast}}"},
+                           {"align_1_ultrafast", "{blend: {align_iterations: 1, align_flow_preset: ultrafast}}"},
+                           {"align_2", "{blend: {align_iterations: 2}}"},
+                           {"submaps_20_align_1", "{submaps: {frames: 20}, blend: {align_iterations: 1}}"},
+                           // study_room.yaml's fusion_real: the configuration for real poses
+                           {"fusion_real", "{submaps: {frames: 20}, blend: {align_iterations: 1, depth: keyframes}}"},
+                           // the same with alignment and depth chosen from the keyframes (both off on the sim)
+                           {"fusion_real_auto", "{submaps: {frames: 20}, blend: {align_iterations: auto, depth: auto}}"},
+                           {"live_blend", "{}", true},
+                           {"live_blend_full_res_reads", "{blend: {keyframe_levels: 0}}", true},
+                           {"live_blend_bicubic", "{blend: {sampling: bicubic}}", true}};
+  if (!a.net.empty()) rows.push_back({"refined (zero-shot)", "{refine: {net: '" + a.net + "'}}"});
+  if (a.row.empty()) return rows;
+  const auto it = std::find_if(rows.begin(), rows.end(), [&](const Row& r) { return r.label == a.row; });
+  if (it == rows.end()) throw std::runtime_error("--row " + a.row + ": no such row (see the table's first column)");
+  return {*it};
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -326,35 +364,7 @@ int main(int argc, char** argv) {
       }
       std::printf("%-26s %9s %9s %9s %9s %10s %9s %7s %6s\n", "row", "size", "p50_ms", "p99_ms", "views/s",
                   "build_ms", "observed", "psnr", "ssim");
-      // live_*: keyframes kept at 640x480 as the trainer's mapper keeps them (BenchRender).
-      struct Row { std::string label, options; bool live = false; };
-      std::vector<Row> rows = {{"blend (mesh)", "{}"},
-                               {"blend_bilinear", "{blend: {sampling: bilinear}}"},
-                               {"blend_raycast", "{tsdf: {surface: raycast}}"},
-                               {"blend_raycast_no_refine", "{tsdf: {surface: raycast, refine_hits: false}}"},
-                               {"blend_block16", "{tsdf: {block_resolution: 16}}"},
-                               {"submaps_10", "{submaps: {frames: 10}}"},
-                               {"submaps_10_render1", "{submaps: {frames: 10, render: 1}}"},
-                               {"submaps_20", "{submaps: {frames: 20}}"},
-                               {"submaps_20_render1", "{submaps: {frames: 20, render: 1}}"},
-                               {"align_1", "{blend: {align_iterations: 1}}"},
-                               {"align_1_fast", "{blend: {align_iterations: 1, align_flow_preset: fast}}"},
-                               {"align_1_ultrafast", "{blend: {align_iterations: 1, align_flow_preset: ultrafast}}"},
-                               {"align_2", "{blend: {align_iterations: 2}}"},
-                               {"submaps_20_align_1", "{submaps: {frames: 20}, blend: {align_iterations: 1}}"},
-                               // study_room.yaml's fusion_real: the configuration for real poses
-                               {"fusion_real", "{submaps: {frames: 20}, blend: {align_iterations: 1, depth: keyframes}}"},
-                               // the same with alignment and depth chosen from the keyframes (both off on the sim)
-                               {"fusion_real_auto", "{submaps: {frames: 20}, blend: {align_iterations: auto, depth: auto}}"},
-                               {"live_blend", "{}", true},
-                               {"live_blend_full_res_reads", "{blend: {keyframe_levels: 0}}", true},
-                               {"live_blend_bicubic", "{blend: {sampling: bicubic}}", true}};
-      if (!a.net.empty()) rows.push_back({"refined (zero-shot)", "{refine: {net: '" + a.net + "'}}"});
-      if (!a.row.empty()) {
-        const auto it = std::find_if(rows.begin(), rows.end(), [&](const Row& r) { return r.label == a.row; });
-        if (it == rows.end()) throw std::runtime_error("--row " + a.row + ": no such row (see the table's first column)");
-        rows = {*it};
-      }
+      const std::vector<Row> rows = RenderRows(a);
       std::vector<p2i::scene::RgbdSample> test_frames;  // at the camera's 640x480, once
       for (const auto& pose : test) test_frames.push_back(sim.Render(pose, train.camera, 0.0));
       for (const auto& size : sizes) {

@@ -463,13 +463,7 @@ void FusionScene::RestoreSubmaps(SubmapSet submaps, std::vector<int> keyframe_su
 }
 
 bool FusionScene::AddFrame(const scene::RgbdSample& frame, bool integrate) {
-  const cv::Size size(frame_camera_.image_width, frame_camera_.image_height);
-  if (frame.depth.type() != CV_32FC1 || frame.depth.size() != size || frame.rgb.type() != CV_8UC3 ||
-      frame.rgb.size() != size) {
-    throw std::invalid_argument("FusionScene::AddFrame: frame '" + frame.id +
-                                "' needs rgb CV_8UC3 and depth CV_32FC1 of the camera size " +
-                                std::to_string(size.width) + "x" + std::to_string(size.height));
-  }
+  scene::CheckFitsCamera(frame, frame_camera_, "FusionScene::AddFrame: frame");
   if (integrate) Integrate(frame);
   const double min_d = options_.blend.keyframe_min_distance;
   if (min_d > 0.0 && !poses_.empty()) {

@@ -44,13 +44,7 @@ SubmapSet::SubmapSet(SubmapOptions options, TsdfOptions tsdf) : options_(options
 }
 
 int SubmapSet::Integrate(const scene::RgbdSample& frame, const scene::CameraInfo& camera) {
-  const cv::Size size(camera.image_width, camera.image_height);
-  if (frame.depth.type() != CV_32FC1 || frame.depth.size() != size || frame.rgb.type() != CV_8UC3 ||
-      frame.rgb.size() != size) {  // refused before a new submap is started for it
-    throw std::invalid_argument("SubmapSet::Integrate: frame '" + frame.id +
-                                "' needs rgb CV_8UC3 and depth CV_32FC1 of the camera size " +
-                                std::to_string(size.width) + "x" + std::to_string(size.height));
-  }
+  scene::CheckFitsCamera(frame, camera, "SubmapSet::Integrate: frame");  // before a new submap starts for it
   bool start = maps_.empty() || sealed_ || maps_.back().frames >= options_.frames;
   if (!start) {  // last_pose_ is the previous frame's
     start = scene::Pose::TranslationDistance(last_pose_, frame.pose) > options_.break_m ||

@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <limits>
 #include <stdexcept>
 #include <vector>
 
@@ -182,22 +183,30 @@ void TsdfOptions::Validate() const {
     fail("surface must be raycast or mesh, got '" + surface + "'");
 }
 
+namespace {
+
+/// The width (m) of one pixel of `frames` at `depth_m`; infinite without a positive focal length.
+double PixelWidthM(const scene::CameraInfo& frames, double depth_m) {
+  const double f = std::min(frames.fx(), frames.fy());
+  return f > 0.0 ? depth_m / f : std::numeric_limits<double>::infinity();
+}
+
+}  // namespace
+
 TsdfOptions TsdfOptions::ForFrames(const scene::CameraInfo& frames) const {
   TsdfOptions o = *this;
   if (o.block_resolution != 0) return o;
-  const double f = std::min(frames.fx(), frames.fy());
   // The width of one pixel at the far end of the range: no wider than a voxel, and every voxel
   // of a surface's truncation band is crossed by some ray, so small blocks leave no gaps.
-  o.block_resolution = f > 0.0 && depth_max_m / f <= voxel_size_m ? 8 : 16;
+  o.block_resolution = PixelWidthM(frames, depth_max_m) <= voxel_size_m ? 8 : 16;
   return o;
 }
 
 std::string TsdfOptions::DescribeBlockChoice(const scene::CameraInfo& frames) const {
-  const double f = std::min(frames.fx(), frames.fy());
   char line[160];
   std::snprintf(line, sizeof(line),
                 "blocks auto: %d^3 voxels (a frame pixel is %.1f cm wide at %.0f m, a voxel %.1f cm)",
-                ForFrames(frames).block_resolution, f > 0.0 ? 100.0 * depth_max_m / f : 0.0, depth_max_m,
+                ForFrames(frames).block_resolution, 100.0 * PixelWidthM(frames, depth_max_m), depth_max_m,
                 100.0 * voxel_size_m);
   return line;
 }
@@ -307,13 +316,7 @@ TsdfVolume::TsdfVolume(TsdfVolume&&) noexcept = default;
 TsdfVolume& TsdfVolume::operator=(TsdfVolume&&) noexcept = default;
 
 void TsdfVolume::Integrate(const scene::RgbdSample& frame, const scene::CameraInfo& camera) {
-  const cv::Size size(camera.image_width, camera.image_height);
-  if (frame.depth.type() != CV_32FC1 || frame.depth.size() != size || frame.rgb.type() != CV_8UC3 ||
-      frame.rgb.size() != size) {
-    throw std::invalid_argument("TsdfVolume::Integrate: frame '" + frame.id +
-                                "' needs rgb CV_8UC3 and depth CV_32FC1 of the camera size " +
-                                std::to_string(size.width) + "x" + std::to_string(size.height));
-  }
+  scene::CheckFitsCamera(frame, camera, "TsdfVolume::Integrate: frame");
   UseThreads(options_.threads);
   impl_->field.reset();
   impl_->mesh.reset();

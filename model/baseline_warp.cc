@@ -101,15 +101,8 @@ DepthWarp::DepthWarp(scene::RgbdDataset training, DepthWarpOptions options,
   if (training_.frames.empty()) {
     throw std::invalid_argument("DepthWarp: the training dataset has no frames");
   }
-  const cv::Size size(training_.camera.image_width, training_.camera.image_height);
   for (const auto& f : training_.frames) {
-    if (f.rgb.type() != CV_8UC3 || f.depth.type() != CV_32FC1 || f.rgb.size() != size ||
-        f.depth.size() != size) {
-      throw std::invalid_argument("DepthWarp: training frame '" + f.id +
-                                  "' needs rgb CV_8UC3 and depth CV_32FC1 of the camera size " +
-                                  std::to_string(size.width) + "x" +
-                                  std::to_string(size.height));
-    }
+    scene::CheckFitsCamera(f, training_.camera, "DepthWarp: training frame");
     poses_.push_back(f.pose);
   }
   output_camera_ = output_camera ? *output_camera : training_.camera;

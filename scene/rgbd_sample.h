@@ -3,6 +3,7 @@
 /// synthesis method returns.
 #pragma once
 
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -22,6 +23,18 @@ struct RgbdSample {
   cv::Mat depth;
   std::string id;      ///< e.g. "seq-01/frame-000935"; for reports
 };
+
+/// Throws std::invalid_argument "WHAT 'ID' needs rgb CV_8UC3 and depth CV_32FC1 of the camera
+/// size WxH" unless `frame`'s images have those types and `camera`'s size. `what` names the caller
+/// and the frame's role, e.g. "TsdfVolume::Integrate: frame".
+inline void CheckFitsCamera(const RgbdSample& frame, const CameraInfo& camera, const std::string& what) {
+  const cv::Size size(camera.image_width, camera.image_height);
+  if (frame.rgb.type() != CV_8UC3 || frame.depth.type() != CV_32FC1 || frame.rgb.size() != size ||
+      frame.depth.size() != size) {
+    throw std::invalid_argument(what + " '" + frame.id + "' needs rgb CV_8UC3 and depth CV_32FC1 of the camera size " +
+                                std::to_string(size.width) + "x" + std::to_string(size.height));
+  }
+}
 
 /// A set of frames of one scene seen by one camera.
 struct RgbdDataset {
