@@ -329,6 +329,7 @@ BlendOptions BlendOptions::FromYaml(const YAML::Node& node, const std::string& s
       o.align.automatic = true;
       o.align.iterations = 1;
     } else {
+      o.align.automatic = false;
       o.align.iterations = r.Int(a, "align_iterations");
     }
   }

@@ -67,11 +67,11 @@ struct BlendOptions {
   /// The view's depth where slots see its surface: "raycast" (the default: the TSDF's surface)
   /// or "keyframes" (the blend-weighted depth of the slots' own depth maps there, each slot's
   /// measured point on its own ray taken to the view's z, as depth warp's depth is; the raycast
-  /// stays where no slot sees the surface), or "auto": whichever of the two reproduces held-out
+  /// stays where no slot sees the surface), or "auto" (the default since session 46): whichever of the two reproduces held-out
   /// keyframes' own depth better (ChooseDepthSource, depth_choice.h), chosen again at every
   /// FusionScene::Prepare. Keyframe depth wins on real sensors (a per-pixel bias shared by nearby
   /// frames), the raycast where depth noise is zero-mean (the sim).
-  std::string depth = "raycast";
+  std::string depth = "auto";
   /// Edge-preserving smoothing of each keyframe's colour before the blend reads it: a 5x5
   /// bilateral filter (spatial sigma 1 px) whose colour sigma is this many 8-bit grey levels
   /// (0 = off, the default; about 3x the camera's RGB noise sigma). The blend weights its best
@@ -79,11 +79,11 @@ struct BlendOptions {
   /// noise does not cancel: on flat surfaces SSIM's structure term pays for both. The keyframes
   /// themselves (keyframes(), the refinement's training targets) stay as captured.
   double keyframe_denoise = 0.0;
-  /// Floating textures (slot_alignment.h): YAML keys align_iterations (0 = off, the default; or
-  /// "auto": one round where a leave-one-out on the keyframes shows it pays, ChooseAlignment in
-  /// align_choice.h, chosen again at every FusionScene::Prepare), align_max_shift_px and
-  /// align_flow_preset.
-  SlotAlignmentOptions align;
+  /// Floating textures (slot_alignment.h): YAML keys align_iterations (0 = off; N = N rounds in
+  /// every view; or "auto", the default since session 46: one round where a leave-one-out on the
+  /// keyframes shows it pays, ChooseAlignment in align_choice.h, chosen again at every
+  /// FusionScene::Prepare), align_max_shift_px and align_flow_preset.
+  SlotAlignmentOptions align = AutoAlignment();
   static BlendOptions FromYaml(const YAML::Node& node, const std::string& source);
   void Validate() const;
 };

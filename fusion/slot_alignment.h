@@ -26,6 +26,14 @@ struct SlotAlignmentOptions {
   std::string flow_preset = "ultrafast";
 };
 
+/// `align_iterations: auto`: one round where the leave-one-out shows it pays (BlendOptions' default).
+inline SlotAlignmentOptions AutoAlignment() {
+  SlotAlignmentOptions o;
+  o.iterations = 1;
+  o.automatic = true;
+  return o;
+}
+
 /// Aligns the slots of `c` to its blend and blends them again (`c->blended` and `c->colours`
 /// change; weights, depth and the far field do not). Needs the slot planes
 /// (CandidateRequest::slot_planes); a view without them, or options.iterations 0, is unchanged.

@@ -61,6 +61,10 @@ class SceneOverFusion : public FusedScene {
 
   size_t Keyframes() const override { return scene_ ? scene_->keyframes().size() : 0; }
 
+  void Prepare() override {
+    if (scene_) scene_->Prepare();
+  }
+
   fusion::ViewCandidates Render(const scene::Pose& pose, const scene::CameraInfo& camera) override {
     return Scene(camera).RenderCandidates(pose, camera);
   }

@@ -31,6 +31,11 @@ class FusedScene {
   /// Adds a keyframe for appearance (its colours and its own depth for the visibility test).
   virtual void AddKeyframe(const scene::RgbdSample& frame, const scene::CameraInfo& camera) = 0;
   virtual size_t Keyframes() const = 0;
+  /// Builds the meshes and makes the options' auto choices (depth source, slot alignment) from
+  /// the keyframes added so far, as a served scene does at load (fusion::FusionScene::Prepare),
+  /// so that renders after it are those a served view of the same frames gets. Nothing fused yet:
+  /// nothing to do.
+  virtual void Prepare() = 0;
   /// The candidates of the view at `pose` seen by `camera`.
   virtual fusion::ViewCandidates Render(const scene::Pose& pose, const scene::CameraInfo& camera) = 0;
   /// Writes the TSDF to `path` in full before returning.

@@ -27,6 +27,7 @@ std::unique_ptr<FusedScene> FuseAll(const scene::RgbdDataset& frames,
     if (i % static_cast<size_t>(keyframe_every) == 0)
       fused->AddKeyframe(frames.frames[i], frames.camera);
   }
+  fused->Prepare();
   return fused;
 }
 
@@ -48,6 +49,9 @@ std::vector<model::RefineSample> MakeLeaveOneOutSamples(const scene::RgbdDataset
       if (kept++ % static_cast<size_t>(options.keyframe_every) == 0)
         fused->AddKeyframe(frames.frames[i], frames.camera);
     }
+    // The auto choices of this fold's keyframes, as the served scene makes them from all of its
+    // own: the refinement trains on the candidates it will be given.
+    fused->Prepare();
     for (size_t i = f; i < n; i += folds) {
       const fusion::ViewCandidates c = fused->Render(frames.frames[i].pose, render_camera);
       if (c.coverage.observed_fraction <= 0.0) continue;

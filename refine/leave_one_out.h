@@ -31,12 +31,16 @@ struct LeaveOneOutOptions {
 };
 
 /// Samples at `render_camera` (frames are centre-cropped/resized to it as targets; fusion uses
-/// the frames as given). Frames whose view sees no fused surface at all are skipped.
+/// the frames as given). Frames whose view sees no fused surface at all are skipped. Each fold's
+/// scene is prepared (FusedScene::Prepare) before its renders: with the fusion defaults' auto
+/// depth and alignment, a fold renders with the choices its own keyframes make, as a served scene
+/// does with all of them.
 std::vector<model::RefineSample> MakeLeaveOneOutSamples(const scene::RgbdDataset& frames,
                                                         const scene::CameraInfo& render_camera,
                                                         const LeaveOneOutOptions& options);
 
-/// A scene fused from every frame (TSDF) with every `keyframe_every`-th frame as a keyframe.
+/// A scene fused from every frame (TSDF) with every `keyframe_every`-th frame as a keyframe,
+/// prepared (FusedScene::Prepare).
 std::unique_ptr<FusedScene> FuseAll(const scene::RgbdDataset& frames,
                                     const FusedSceneOptions& options, int keyframe_every = 1);
 

@@ -118,6 +118,7 @@ TEST_CASE("Align choice: few keyframes keep it off, the YAML takes auto, bad arg
   CHECK_THROWS_WITH(BlendOptions::FromYaml(YAML::Load("{align_iterations: sometimes}"), "cfg.yaml"),
                     Catch::Contains("cfg.yaml") && Catch::Contains("align_iterations"));
   BlendOptions zero;
+  zero.align.iterations = 0;
   zero.align.automatic = true;
   CHECK_THROWS_WITH(zero.Validate(), Catch::Contains("at least one round"));
   FusionScene fs(cam, AlignAuto());

@@ -122,7 +122,8 @@ TEST_CASE("Depth choice: fewer than 3 keyframes keep the raycast, the YAML key a
   CHECK(fs.depth_choice().source == "raycast");
   CHECK(fs.depth_choice().frames == 0);
   CHECK_THAT(fs.depth_choice().Describe(), Catch::Contains("fewer than 3"));
-  CHECK(BlendOptions::FromYaml(YAML::Load("{depth: auto}"), "cfg.yaml").depth == "auto");
+  CHECK(BlendOptions::FromYaml(YAML::Load("{depth: raycast}"), "cfg.yaml").depth == "raycast");
+  CHECK(BlendOptions::FromYaml(YAML::Load("{}"), "cfg.yaml").depth == "auto");  // the default
   CHECK_THROWS_WITH(ChooseDepthSource(fs, 0, 160), Catch::Contains("max_frames"));
   CHECK_THROWS_WITH(ChooseDepthSource(fs, 4, 4), Catch::Contains("max_width"));
 }

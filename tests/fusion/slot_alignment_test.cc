@@ -101,7 +101,12 @@ TEST_CASE("Slot alignment: the blend options read and check align_*", "[unit]") 
       BlendOptions::FromYaml(YAML::Load("{align_iterations: 2, align_max_shift_px: 1.5}"), "cfg.yaml");
   CHECK(o.align.iterations == 2);
   CHECK(o.align.max_shift_px == 1.5);
-  CHECK(BlendOptions{}.align.iterations == 0);  // off by default
+  CHECK_FALSE(BlendOptions::FromYaml(YAML::Load("{align_iterations: 2}"), "cfg.yaml").align.automatic);
+  CHECK(BlendOptions::FromYaml(YAML::Load("{align_iterations: 0}"), "cfg.yaml").align.iterations == 0);
+  // auto by default: one round where the leave-one-out shows it pays (align_choice.h)
+  CHECK(BlendOptions{}.align.automatic);
+  CHECK(BlendOptions{}.align.iterations == 1);
+  CHECK(BlendOptions::FromYaml(YAML::Load("{}"), "cfg.yaml").align.automatic);
   CHECK_THROWS_WITH(BlendOptions::FromYaml(YAML::Load("{align_iterations: 9}"), "cfg.yaml"),
                     Catch::Contains("cfg.yaml") && Catch::Contains("align_iterations"));
   CHECK_THROWS_WITH(BlendOptions::FromYaml(YAML::Load("{align_max_shift_px: 0}"), "cfg.yaml"),
@@ -115,8 +120,10 @@ TEST_CASE("Slot alignment: FusionScene aligns when asked and keeps exact views e
   const testing::PlaneScene scene;
   const auto cam = testing::Cam(64, 48, 60);
   FusionSceneOptions plain;
+  plain.blend.align = SlotAlignmentOptions{};  // off
   FusionSceneOptions aligned;
-  aligned.blend.align.iterations = 2;
+  aligned.blend.align = SlotAlignmentOptions{};
+  aligned.blend.align.iterations = 2;  // in every view
   FusionScene a(cam, plain), b(cam, aligned);
   for (double x : {-0.1, 0.0, 0.1}) {
     a.AddFrame(scene.Render(testing::At(x, 0, 0), cam));
@@ -146,7 +153,8 @@ TEST_CASE("Slot alignment: a view aligns the same after a view of another size",
   const auto build = [&](const scene::CameraInfo& cam) {
     FusionSceneOptions o;
     o.blend.visibility_abs_m = 0.6;  // the off geometry below stays visible, so slots misregister
-    o.blend.align.iterations = 1;
+    o.blend.align = SlotAlignmentOptions{};
+    o.blend.align.iterations = 1;  // in every view
     auto fs = std::make_unique<FusionScene>(cam, o);
     testing::AddOverScaledGeometry(scene, cam, {-0.16, -0.08, 0.0, 0.08, 0.16}, 1.25, fs.get());
     return fs;

@@ -9,6 +9,7 @@
 #include "scene/image_ops.h"
 #include "scene/sim_scene.h"
 #include "scene/trajectory.h"
+#include "tests/fusion/fusion_test_util.h"
 
 using namespace p2i;
 
@@ -51,4 +52,46 @@ TEST_CASE("Leave-one-out samples of a tiny scene lower the refinement loss when 
   const model::RefineFitReport fit = r->refiner().Fit(samples, t);
   INFO("loss " << fit.first_loss << " -> " << fit.last_loss);
   CHECK(fit.last_loss < fit.first_loss);
+}
+
+TEST_CASE("Leave-one-out folds render with the auto choices a served scene of their frames makes", "[unit]") {
+  // Each frame's depth is scaled by 1 + 0.2 x (its camera's x): neighbours share the bias, the
+  // TSDF averages it away, so `depth: auto` picks the keyframes' depth. The refinement must train
+  // on the candidates it will be served: a fold prepared like a served scene, not the raycast an
+  // unprepared scene renders.
+  fusion::testing::PlaneScene plane;
+  plane.patch_z = 1.5;
+  const scene::CameraInfo cam = fusion::testing::Cam(48, 36, 45);
+  scene::RgbdDataset d;
+  d.camera = cam;
+  for (int i = 0; i < 9; ++i) {
+    const double x = -0.16 + 0.04 * i;
+    scene::RgbdSample f = plane.Render(fusion::testing::At(x, 0, 0), cam);
+    f.depth = f.depth * (1.0 + 0.2 * x);
+    f.id = "f" + std::to_string(i);
+    d.frames.push_back(f);
+  }
+  fusion::FusionSceneOptions o;
+  o.blend.depth = "auto";
+  o.blend.align = fusion::SlotAlignmentOptions{};  // off: this test is about the depth choice
+  refine::LeaveOneOutOptions loo;
+  loo.folds = 3;
+  loo.fusion_scene = o;
+  const auto samples = refine::MakeLeaveOneOutSamples(d, cam, loo);
+  REQUIRE(samples.size() == 9);
+
+  // Fold 0 (frames 0, 3, 6 held out) built as a served scene: its first sample is frame 0's view.
+  fusion::FusionScene served(cam, o);
+  for (size_t i = 0; i < d.frames.size(); ++i)
+    if (i % 3 != 0) served.AddFrame(d.frames[i]);
+  served.Prepare();
+  REQUIRE(served.keyframe_depth());
+  const model::RefineSample want =
+      model::MakeRefineSample(served.RenderCandidates(d.frames[0].pose, cam), d.frames[0]);
+  CHECK(cv::norm(samples[0].input.base_depth, want.input.base_depth, cv::NORM_INF) == 0.0);
+  CHECK(cv::norm(samples[0].input.base_rgb, want.input.base_rgb, cv::NORM_INF) == 0.0);
+  fusion::CandidateRequest raycast;
+  raycast.keyframe_depth = false;
+  const cv::Mat raycast_depth = served.RenderCandidates(d.frames[0].pose, cam, raycast).depth;
+  CHECK(cv::norm(samples[0].input.base_depth, raycast_depth, cv::NORM_INF) > 0.01);
 }
