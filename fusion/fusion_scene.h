@@ -64,13 +64,14 @@ struct BlendOptions {
   /// stays 0 (no geometry), ViewCandidates::far marks them. 0 = off (they stay holes for the
   /// hole fill). Default: the TSDF's default depth_max_m.
   double far_depth_m = 5.0;
-  /// The view's depth where slots see its surface: "raycast" (the default: the TSDF's surface)
-  /// or "keyframes" (the blend-weighted depth of the slots' own depth maps there, each slot's
-  /// measured point on its own ray taken to the view's z, as depth warp's depth is; the raycast
-  /// stays where no slot sees the surface), or "auto" (the default since session 46): whichever of the two reproduces held-out
-  /// keyframes' own depth better (ChooseDepthSource, depth_choice.h), chosen again at every
-  /// FusionScene::Prepare. Keyframe depth wins on real sensors (a per-pixel bias shared by nearby
-  /// frames), the raycast where depth noise is zero-mean (the sim).
+  /// The view's depth where slots see its surface: "raycast" (the TSDF's surface; the default
+  /// until session 46), "keyframes" (the blend-weighted depth of the slots' own depth maps there,
+  /// each slot's measured point on its own ray taken to the view's z, as depth warp's depth is;
+  /// the raycast stays where no slot sees the surface), or "auto" (the default since session 46):
+  /// whichever of the two reproduces held-out keyframes' own depth better (ChooseDepthSource,
+  /// depth_choice.h), chosen again at every FusionScene::Prepare. Keyframe depth wins on real
+  /// sensors (a per-pixel bias shared by nearby frames), the raycast where depth noise is
+  /// zero-mean (the sim).
   std::string depth = "auto";
   /// Edge-preserving smoothing of each keyframe's colour before the blend reads it: a 5x5
   /// bilateral filter (spatial sigma 1 px) whose colour sigma is this many 8-bit grey levels
