@@ -423,6 +423,16 @@ void FusionScene::Integrate(const scene::RgbdSample& frame) {
     tsdf_.Integrate(frame, frame_camera_);
     return;
   }
+  if (submaps_->Deferring()) {
+    // One capture so far: its frames are the global TSDF's alone. At a pose jump the submaps copy
+    // the global TSDF as it is (the first capture's submap) before this frame enters it.
+    scene::CheckFitsCamera(frame, frame_camera_, "FusionScene::Integrate: frame");
+    submaps_->Integrate(frame, frame_camera_, &tsdf_);
+    if (submaps_->size() > 0)
+      std::replace(keyframe_submap_.begin(), keyframe_submap_.end(), -1, 0);  // the first capture's
+    tsdf_.Integrate(frame, frame_camera_);
+    return;
+  }
   // The global TSDF and the current submap are independent volumes: the submap integrates on a
   // second thread while this one integrates the global TSDF (same result as one after the other;
   // a 640x480 frame then costs one integration's time, not two). The future's destructor waits
@@ -435,12 +445,15 @@ void FusionScene::Integrate(const scene::RgbdSample& frame) {
 void FusionScene::Prepare() {
   tsdf_.Prepare();
   if (submaps_) submaps_->Prepare();
+  if (submaps_ && options_.submaps.use == "auto") submap_choice_ = ChooseSubmaps(*this);
   if (options_.blend.depth == "auto") depth_choice_ = ChooseDepthSource(*this);
   if (options_.blend.align.automatic) align_choice_ = ChooseAlignment(*this);
 }
 
 std::string FusionScene::AutoChoices() const {
   std::string out = blocks_auto_ ? options_.tsdf.DescribeBlockChoice(frame_camera_) : "";
+  if (submaps_ && options_.submaps.use == "auto" && submap_choice_.frames > 0)
+    out += (out.empty() ? "" : "; ") + submap_choice_.Describe();
   if (options_.blend.depth == "auto" && depth_choice_.frames > 0)
     out += (out.empty() ? "" : "; ") + depth_choice_.Describe();
   if (options_.blend.align.automatic && align_choice_.frames > 0)
@@ -494,8 +507,8 @@ bool FusionScene::AddFrame(const scene::RgbdSample& frame, bool integrate) {
 }
 
 TsdfRaycast FusionScene::Surface(const std::vector<int>& slot_keyframes, const scene::Pose& pose,
-                                 const scene::CameraInfo& camera) {
-  if (!submaps_ || submaps_->size() == 0) return tsdf_.Raycast(pose, camera);
+                                 const scene::CameraInfo& camera, bool use_submaps) {
+  if (!use_submaps || !submaps_ || submaps_->size() == 0) return tsdf_.Raycast(pose, camera);
   std::vector<int> order;
   for (int i : slot_keyframes) order.push_back(keyframe_submap_.at(static_cast<size_t>(i)));
   TsdfRaycast ray = submaps_->Raycast(order, pose, camera);
@@ -515,7 +528,7 @@ ViewCandidates FusionScene::RenderCandidates(const scene::Pose& pose, const scen
   for (const Slot& s : slots) slot_keyframes.push_back(s.index);
   const bool align = request.align.value_or(aligned());  // aligning reads the slot planes
   const bool planes = request.slot_planes || align;
-  ViewCandidates c = EmptyCandidates(pose, camera, Surface(slot_keyframes, pose, camera), k, planes);
+  ViewCandidates c = EmptyCandidates(pose, camera, Surface(slot_keyframes, pose, camera, request.submaps.value_or(uses_submaps())), k, planes);
   RecordSlots(slots, k, &c);
   KeyframeBlender blender(pose, camera, frame_camera_, options_.blend, slots, level, planes,
                           request.keyframe_depth.value_or(keyframe_depth()));

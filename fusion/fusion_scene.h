@@ -12,6 +12,7 @@
 #include "fusion/align_choice.h"
 #include "fusion/depth_choice.h"
 #include "fusion/slot_alignment.h"
+#include "fusion/submap_choice.h"
 #include "fusion/submaps.h"
 #include "fusion/tsdf_volume.h"
 #include "fusion/view_candidates.h"
@@ -92,8 +93,9 @@ struct BlendOptions {
 struct FusionSceneOptions {
   TsdfOptions tsdf;
   BlendOptions blend;
-  /// Local submaps (off by default: one global TSDF).
-  SubmapOptions submaps;
+  /// Local submaps. Default (since session 47): a submap per capture, used where a leave-one-out
+  /// on the keyframes shows they pay (SubmapOptions::PerCaptureAuto; one capture keeps none).
+  SubmapOptions submaps = SubmapOptions::PerCaptureAuto();
   /// Reads {tsdf: {...}, blend: {...}, submaps: {...}} (all optional), then Validate().
   static FusionSceneOptions FromYaml(const YAML::Node& node, const std::string& source);
   void Validate() const;
@@ -113,6 +115,9 @@ struct CandidateRequest {
   /// Overrides the scene's slot alignment for this view (true: align, with the options' rounds
   /// or one; false: not); unset = the scene's (align_iterations, or its auto choice).
   std::optional<bool> align;
+  /// Overrides whether the surface comes from the submaps (true; where the scene has any) or the
+  /// global TSDF alone (false); unset = the scene's (SubmapOptions::use, or its auto choice).
+  std::optional<bool> submaps;
 };
 
 /// Frames arrive at any time (AddFrame); every render uses everything added so far.
@@ -165,6 +170,15 @@ class FusionScene {
   /// The last `align_iterations: auto` choice (Prepare); default-constructed (off, 0 frames) when
   /// the alignment is not auto or before the first Prepare.
   const AlignChoice& align_choice() const { return align_choice_; }
+  /// The last `submaps: {use: auto}` choice (Prepare); default-constructed (not used, 0 frames)
+  /// when use is not auto or before the first Prepare.
+  const SubmapChoice& submap_choice() const { return submap_choice_; }
+  /// Whether the views' surface comes from the submaps (the scene has some, and use "always" or
+  /// auto chose them).
+  bool uses_submaps() const {
+    return submaps_ && submaps_->size() > 0 &&
+           (options_.submaps.use == "always" || submap_choice_.used);
+  }
   /// Whether the views align their slots (align_iterations > 0 and not auto, or auto chose it).
   bool aligned() const {
     return options_.blend.align.iterations > 0 &&
@@ -184,7 +198,7 @@ class FusionScene {
   /// The raycast surface of a view: the global TSDF's, or (submaps) the merged raycast of the
   /// submaps of the slots' keyframes (nearest first), its holes filled from the global TSDF.
   TsdfRaycast Surface(const std::vector<int>& slot_keyframes, const scene::Pose& pose,
-                      const scene::CameraInfo& camera);
+                      const scene::CameraInfo& camera, bool use_submaps);
 
   scene::CameraInfo frame_camera_;
   FusionSceneOptions options_;
@@ -201,6 +215,7 @@ class FusionScene {
   /// Levels 1.. of each keyframe's depth pyramid (DepthPyramid), read by the visibility test.
   std::vector<std::vector<cv::Mat>> depth_levels_;
   std::vector<scene::Pose> poses_;
+  SubmapChoice submap_choice_;
   DepthChoice depth_choice_;
   AlignChoice align_choice_;
 };

@@ -16,10 +16,18 @@ namespace p2i::fusion {
 
 SubmapOptions SubmapOptions::FromYaml(const YAML::Node& node, const std::string& source) {
   const scene::StrictYamlReader r(source);
-  r.CheckKeys(node, {"frames", "break_m", "break_deg", "render"}, "submap options");
-  SubmapOptions o;
-  if (node["frames"]) o.frames = r.Int(node["frames"], "frames");
+  r.CheckKeys(node, {"frames", "break_m", "break_deg", "render", "use"}, "submap options");
+  SubmapOptions o = PerCaptureAuto();
+  if (node["frames"]) {
+    if (node["frames"].IsScalar() && node["frames"].Scalar() == "capture") {
+      o.frames = SubmapOptions::kCapture;
+    } else {
+      o.frames = r.Int(node["frames"], "frames");
+      o.use = "always";  // submaps by count, as asked (`use` below may still say auto)
+    }
+  }
   if (node["render"]) o.render = r.Int(node["render"], "render");
+  if (node["use"]) o.use = r.String(node["use"], "use");
   r.OptionalDouble(node, "break_m", "submaps", &o.break_m);
   r.OptionalDouble(node, "break_deg", "submaps", &o.break_deg);
   try {
@@ -36,6 +44,11 @@ void SubmapOptions::Validate() const {
   if (!(break_m > 0.0) || !std::isfinite(break_m)) fail("break_m must be > 0");
   if (!(break_deg > 0.0) || !std::isfinite(break_deg)) fail("break_deg must be > 0");
   if (render < 1 || render > 8) fail("render must be in [1, 8], got " + std::to_string(render));
+  if (use != "always" && use != "auto") fail("use must be \"always\" or \"auto\", got \"" + use + "\"");
+}
+
+std::string SubmapOptions::DescribeFrames() const {
+  return per_capture() ? "capture" : std::to_string(frames);
 }
 
 SubmapSet::SubmapSet(SubmapOptions options, TsdfOptions tsdf) : options_(options), tsdf_(std::move(tsdf)) {
@@ -43,13 +56,27 @@ SubmapSet::SubmapSet(SubmapOptions options, TsdfOptions tsdf) : options_(options
   tsdf_.Validate();
 }
 
-int SubmapSet::Integrate(const scene::RgbdSample& frame, const scene::CameraInfo& camera) {
+int SubmapSet::Integrate(const scene::RgbdSample& frame, const scene::CameraInfo& camera,
+                         const TsdfVolume* global) {
   scene::CheckFitsCamera(frame, camera, "SubmapSet::Integrate: frame");  // before a new submap starts for it
-  bool start = maps_.empty() || sealed_ || maps_.back().frames >= options_.frames;
-  if (!start) {  // last_pose_ is the previous frame's
-    start = scene::Pose::TranslationDistance(last_pose_, frame.pose) > options_.break_m ||
-            scene::Pose::RotationDistanceDeg(last_pose_, frame.pose) > options_.break_deg;
+  const auto jumps = [&] {  // last_pose_ is the previous frame's
+    return scene::Pose::TranslationDistance(last_pose_, frame.pose) > options_.break_m ||
+           scene::Pose::RotationDistanceDeg(last_pose_, frame.pose) > options_.break_deg;
+  };
+  if (Deferring()) {
+    if (deferred_ == 0 || !jumps()) {  // still the first capture: the global TSDF's frames
+      ++deferred_;
+      last_pose_ = frame.pose;
+      return -1;
+    }
+    if (!global)
+      throw std::invalid_argument("SubmapSet::Integrate: the first capture's submap needs the global TSDF");
+    maps_.push_back(Map{global->Clone(), deferred_});
+    maps_.back().volume.Prepare();  // final from now on
+    sealed_ = true;                 // the frame starts the next submap
   }
+  bool start = maps_.empty() || sealed_ || maps_.back().frames >= options_.frames;
+  if (!start) start = jumps();
   if (start) {
     if (!maps_.empty() && !sealed_) maps_.back().volume.Prepare();  // final from now on
     maps_.push_back(Map{TsdfVolume(tsdf_), 0});

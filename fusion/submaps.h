@@ -21,7 +21,12 @@ class Node;
 namespace p2i::fusion {
 
 struct SubmapOptions {
-  /// Frames fused into one submap before the next one starts (0 = no submaps: one global TSDF).
+  /// `frames: capture`: a submap per capture, ended only by a pose jump.
+  static constexpr int kCapture = 2147483647;
+  /// Frames fused into one submap before the next one starts (0 = no submaps: one global TSDF;
+  /// kCapture, YAML "capture" = one per capture). Per-capture submaps start lazily: while there
+  /// is one capture its frames are the global TSDF's, and no submap is kept; at the first pose
+  /// jump a copy of the global TSDF becomes the first capture's submap (SubmapSet::Integrate).
   int frames = 0;
   /// A frame whose pose jumps this far from the previous frame's (metres, or degrees) starts a new
   /// submap: the next capture, or a relocalisation.
@@ -31,12 +36,29 @@ struct SubmapOptions {
   /// many; each fills the pixels the previous ones left without a surface. The global TSDF (every
   /// frame) fills what is left.
   int render = 2;
-  /// Reads {frames, break_m, break_deg, render} (all optional), then Validate(). Unknown keys and
+  /// Whether views use the submaps: "always", or "auto": only where a leave-one-out on the
+  /// keyframes shows they pay (ChooseSubmaps, submap_choice.h), chosen at every
+  /// FusionScene::Prepare; until then, and where they do not pay, views use the global TSDF.
+  std::string use = "always";
+  /// Reads {frames, break_m, break_deg, render, use} (all optional) over the fusion default
+  /// (PerCaptureAuto), then Validate(). `frames: N` (a count) without `use` is used always, as
+  /// submaps by count were before `use` existed; `frames: 0` turns the submaps off. Unknown keys and
   /// bad values throw std::runtime_error naming `source`, the line and the key.
   static SubmapOptions FromYaml(const YAML::Node& node, const std::string& source);
   /// Throws std::invalid_argument naming the field.
   void Validate() const;
   bool enabled() const { return frames > 0; }
+  /// The `fusion` method's default: a submap per capture, used where a leave-one-out shows they
+  /// pay (one capture keeps none: its frames are the global TSDF's).
+  static SubmapOptions PerCaptureAuto() {
+    SubmapOptions o;
+    o.frames = kCapture;
+    o.use = "auto";
+    return o;
+  }
+  bool per_capture() const { return frames == kCapture; }
+  /// "capture", or the frame count.
+  std::string DescribeFrames() const;
 };
 
 /// The submaps of a growing capture. Frames arrive in capture order (Integrate); each goes into
@@ -49,7 +71,16 @@ class SubmapSet {
   /// Fuses the frame into the current submap (starting a new one first when due) and returns that
   /// submap's index. The submap a new one replaces never changes again: it is prepared
   /// (TsdfVolume::Prepare) here, so no view pays for its mesh.
-  int Integrate(const scene::RgbdSample& frame, const scene::CameraInfo& camera);
+  /// Per capture (SubmapOptions::per_capture) while no submap exists: the frame is the global
+  /// TSDF's alone (returns -1) until a pose jump; then a copy of `global` (which must hold
+  /// exactly the frames passed so far, not yet this one) becomes submap 0 and the frame starts
+  /// submap 1. `global` may be null otherwise.
+  int Integrate(const scene::RgbdSample& frame, const scene::CameraInfo& camera,
+                const TsdfVolume* global = nullptr);
+  /// Whether the next Integrate of a frame at `pose` reads `global` or keeps the frame out of the
+  /// submaps (per capture, no submap yet): the caller must then integrate the global TSDF after
+  /// it, not beside it.
+  bool Deferring() const { return options_.per_capture() && maps_.empty(); }
 
   /// Appends a finished submap (one loaded from a saved version, `frames` its frame count). The
   /// next Integrate starts a new submap after it.
@@ -86,6 +117,7 @@ class SubmapSet {
   std::vector<Map> maps_;
   scene::Pose last_pose_;  ///< of the last frame integrated (valid unless sealed_)
   bool sealed_ = false;    ///< the last submap was appended (Append): the next frame starts one
+  int deferred_ = 0;       ///< per capture: frames passed before the first submap (the global's)
 };
 
 /// Pixels of `into` without a surface (depth 0) take depth, normal and colour from `from`.

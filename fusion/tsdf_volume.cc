@@ -219,32 +219,41 @@ namespace {
 /// six frames). The mesh is therefore extracted from a copy whose buffer index 0 holds an empty
 /// sentinel block far from everything (weight 0: no surface, no neighbour), then every block of
 /// the grid. Costs a copy of the voxel data (~20-30 ms per 1000 blocks of 16^3) per extraction.
-tg::VoxelBlockGrid ExtractionCopy(tg::VoxelBlockGrid& grid, const TsdfOptions& o) {
+/// A copy of `grid`'s active blocks in a new grid with room for at least `capacity` blocks;
+/// `sentinel` first puts an empty block far from everything at buffer index 0 (ExtractionCopy).
+tg::VoxelBlockGrid CopyBlocks(tg::VoxelBlockGrid& grid, const TsdfOptions& o, int64_t capacity, bool sentinel) {
   core::HashMap map = grid.GetHashMap();
   const core::Tensor active = map.GetActiveIndices().To(core::Int64);
   const core::Tensor keys = map.GetKeyTensor().IndexGet({active}).Contiguous();
   const int64_t n = keys.GetLength();
   tg::VoxelBlockGrid copy({"tsdf", "weight", "color"}, {core::Float32, core::Float32, core::Float32},
                           {{1}, {1}, {3}}, static_cast<float>(o.voxel_size_m), o.block_resolution,
-                          n + 1, core::Device("CPU:0"));
+                          std::max(capacity, n + (sentinel ? 1 : 0)), core::Device("CPU:0"));
   core::HashMap cmap = copy.GetHashMap();
-  const int far = -(1 << 20);
-  const auto [sentinel, sentinel_ok] = cmap.Activate(core::Tensor::Init<int>({{far, far, far}}));
-  if (sentinel.To(core::Int64).GetDataPtr<int64_t>()[0] != 0)
-    throw std::runtime_error("TsdfVolume: the mesh extraction's sentinel block did not get buffer index 0");
+  const int64_t r3 = static_cast<int64_t>(o.block_resolution) * o.block_resolution * o.block_resolution;
+  if (sentinel) {
+    const int far = -(1 << 20);
+    const auto [first, first_ok] = cmap.Activate(core::Tensor::Init<int>({{far, far, far}}));
+    if (first.To(core::Int64).GetDataPtr<int64_t>()[0] != 0)
+      throw std::runtime_error("TsdfVolume: the mesh extraction's sentinel block did not get buffer index 0");
+  }
+  if (n == 0) return copy;
   const auto [buf, ok] = cmap.Activate(keys);
   const core::Tensor dst = buf.To(core::Int64).Contiguous();
   const int64_t* dp = dst.GetDataPtr<int64_t>();
   const int64_t* sp = active.GetDataPtr<int64_t>();
-  const int64_t r3 = static_cast<int64_t>(o.block_resolution) * o.block_resolution * o.block_resolution;
   for (const auto& [name, channels] : {std::pair<const char*, int64_t>{"tsdf", 1}, {"weight", 1}, {"color", 3}}) {
     const float* from = grid.GetAttribute(name).GetDataPtr<float>();
     float* to = copy.GetAttribute(name).GetDataPtr<float>();
     const int64_t block = r3 * channels;
-    std::fill(to, to + block, 0.0f);  // the sentinel: weight 0
+    if (sentinel) std::fill(to, to + block, 0.0f);  // weight 0
     for (int64_t i = 0; i < n; ++i) std::copy(from + sp[i] * block, from + (sp[i] + 1) * block, to + dp[i] * block);
   }
   return copy;
+}
+
+tg::VoxelBlockGrid ExtractionCopy(tg::VoxelBlockGrid& grid, const TsdfOptions& o) {
+  return CopyBlocks(grid, o, 0, true);
 }
 
 }  // namespace
@@ -309,6 +318,13 @@ TsdfVolume::TsdfVolume(TsdfOptions options) : options_(options) {
                                    static_cast<float>(options_.voxel_size_m),
                                    options_.block_resolution, options_.initial_blocks,
                                    core::Device("CPU:0"));
+}
+
+TsdfVolume TsdfVolume::Clone() const {
+  TsdfVolume v(options_);
+  v.impl_->grid = CopyBlocks(impl_->grid, options_, options_.initial_blocks, false);
+  v.impl_->frames = impl_->frames;
+  return v;
 }
 
 TsdfVolume::~TsdfVolume() = default;

@@ -97,6 +97,8 @@ class TsdfVolume {
   ~TsdfVolume();
   TsdfVolume(TsdfVolume&&) noexcept;
   TsdfVolume& operator=(TsdfVolume&&) noexcept;
+  /// A deep copy of the voxel data and frame count (the copy's mesh is built on its first use).
+  TsdfVolume Clone() const;
 
   /// Fuses one frame (rgb CV_8UC3 RGB, depth CV_32FC1 metres, 0 = invalid, both of `camera`'s
   /// size; `frame.pose` camera-to-world). Throws std::invalid_argument naming the frame on a

@@ -83,6 +83,7 @@ TEST_CASE("fusion version: local submaps are saved and built back", "[unit]") {
   options.tsdf.voxel_size_m = 0.03;
   options.tsdf.block_resolution = 8;
   options.submaps.frames = 6;
+  options.submaps.use = "always";
   options.submaps.render = 1;
   FusionScene fused(cam, options);
   scene::CaptureWriter keyframes(dir + "/keyframes", cam);
@@ -162,6 +163,7 @@ TEST_CASE("fusion version: unchanged submaps are linked from the previous versio
   options.tsdf.voxel_size_m = 0.04;
   options.tsdf.block_resolution = 8;
   options.submaps.frames = 3;
+  options.submaps.use = "always";
   FusionScene fused(cam, options);
   scene::CaptureWriter keyframes(dir + "/keyframes", cam);
   size_t added = 0;

@@ -69,6 +69,7 @@ TEST_CASE("FusionScene with submaps: keyframes know their submap, views render f
   const auto cam = Cam(40, 30, 35);
   FusionSceneOptions o;
   o.submaps.frames = 2;
+  o.submaps.use = "always";
   FusionScene scene(cam, o);
   for (double x : {0.0, 0.05, 0.1}) scene.AddFrame(plane.Render(At(x, 0, 0), cam));
   REQUIRE(scene.submaps() != nullptr);
@@ -77,9 +78,16 @@ TEST_CASE("FusionScene with submaps: keyframes know their submap, views render f
   const cv::Mat truth = plane.Render(At(0.1, 0, 0), cam).depth;
   CHECK(cv::countNonZero(c.depth > 0.0f) > 0.8 * 40 * 30);
   CHECK(std::abs(c.depth.at<float>(15, 20) - truth.at<float>(15, 20)) < 0.01);
-  // Off by default: no submaps.
+  // By default a submap per capture, kept only from the second capture on; `frames: 0`: none.
   FusionScene plain(cam, FusionSceneOptions{});
-  CHECK(plain.submaps() == nullptr);
+  REQUIRE(plain.submaps() != nullptr);
+  CHECK(plain.submaps()->options().per_capture());
+  CHECK(plain.options().submaps.use == "auto");
+  for (double x : {0.0, 0.05, 0.1}) plain.AddFrame(plane.Render(At(x, 0, 0), cam));
+  CHECK(plain.submaps()->size() == 0);
+  FusionSceneOptions none;
+  none.submaps.frames = 0;
+  CHECK(FusionScene(cam, none).submaps() == nullptr);
 }
 
 TEST_CASE("FusionScene with submaps: the submap integrates beside the global TSDF, as if one after the other",
@@ -89,6 +97,7 @@ TEST_CASE("FusionScene with submaps: the submap integrates beside the global TSD
   const auto cam = Cam(64, 48, 55);
   FusionSceneOptions o;
   o.submaps.frames = 3;
+  o.submaps.use = "always";
   FusionScene scene(cam, o);
   TsdfVolume global(o.tsdf.ForFrames(cam));
   SubmapSet submaps(o.submaps, o.tsdf.ForFrames(cam));
