@@ -219,4 +219,60 @@ TEST_CASE("fusion version: unchanged submaps are linked from the previous versio
   CHECK_NOTHROW(LoadFusionVersion(v2, FusionOptions{}, 48, 48));
 }
 
+TEST_CASE("fusion version: per-capture submaps (the default) are saved from the second capture on",
+          "[unit]") {
+  const std::string dir = p2i::testing::FreshDir("fusion_version_io_captures");
+  const auto sim = scene::SimScene::BuiltIn("small_office");
+  const scene::CameraInfo cam = scene::SimScene::DefaultCamera(80, 60);
+  const auto sweep = scene::GenerateArmSweep({});
+  FusionSceneOptions options;  // submaps: {frames: capture, use: auto}
+  options.tsdf.voxel_size_m = 0.03;
+  options.tsdf.block_resolution = 8;
+  FusionScene fused(cam, options);
+  scene::CaptureWriter keyframes(dir + "/keyframes", cam);
+  const size_t n = sweep.size() / 8;
+  FusionVersionInfo info;
+  info.keyframes_dir = dir + "/keyframes";
+  std::string one_capture;
+  for (size_t j = 0; j < n; ++j) {
+    const size_t i = j * 8;
+    scene::RgbdSample s = sim.Render(sweep[i].pose, cam, sweep[i].stamp);
+    s.id = "f" + std::to_string(i);
+    if (j == n / 2) {  // one capture so far: a version holds the global TSDF alone
+      info.version = 1;
+      info.frames_integrated = info.keyframe_count = j;
+      one_capture = WriteSceneVersion(dir + "/versions", fused, info);
+    }
+    // The second half is a second capture whose poses are recorded 0.6 m off: a pose jump.
+    if (j >= n / 2)
+      s.pose = scene::Pose(s.pose.translation() + Eigen::Vector3d(0.6, 0.0, 0.0), s.pose.rotation());
+    fused.AddFrame(s);
+    keyframes.Append(s);
+  }
+  const model::FusionVersionManifest first = model::ReadFusionVersion(one_capture);
+  CHECK(first.submap_files.empty());
+  REQUIRE(fused.submaps()->size() == 2);
+  CHECK(fused.submaps()->frames_in(0) == static_cast<int>(n / 2));
+  info.version = 2;
+  info.frames_integrated = info.keyframe_count = n;
+  const std::string two_captures = WriteSceneVersion(dir + "/versions", fused, info);
+  const model::FusionVersionManifest m = model::ReadFusionVersion(two_captures);
+  CHECK(m.submap_files.size() == 2);
+  CHECK(m.submap_frames == SubmapOptions::kCapture);
+  CHECK(m.keyframe_submaps == fused.keyframe_submaps());
+
+  LoadedFusionVersion v = LoadFusionVersion(two_captures, FusionOptions{}, 48, 48);
+  FusionScene& loaded = v.synthesizer->scene();
+  REQUIRE(loaded.submaps() != nullptr);
+  CHECK(loaded.submaps()->size() == 2);
+  CHECK(loaded.submaps()->options().per_capture());
+  CHECK(loaded.submap_choice().submaps == 2);  // chosen again at the load
+  CHECK(loaded.submap_choice().frames > 0);
+  CHECK(loaded.uses_submaps());  // the second capture lies 0.6 m off: the submaps pay
+  CHECK_THAT(loaded.AutoChoices(), Catch::Contains("submaps auto: "));
+  LoadedFusionVersion single = LoadFusionVersion(one_capture, FusionOptions{}, 48, 48);
+  CHECK(single.synthesizer->scene().submaps()->size() == 0);
+  CHECK_FALSE(single.synthesizer->scene().uses_submaps());
+}
+
 }  // namespace p2i::fusion
