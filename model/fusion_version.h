@@ -34,7 +34,8 @@ struct FusionVersionManifest {
   /// Local submaps (fusion::SubmapOptions; all empty = one global TSDF): one TSDF file per
   /// submap (relative to the version folder, same voxel size as tsdf_file), the frames fused into
   /// each, the submap of each of the keyframe_count keyframes (-1 = none), and the option
-  /// `frames` they were cut with.
+  /// `frames` they were cut with (2147483647: one per capture, fusion::SubmapOptions::kCapture;
+  /// a version of a single capture has none: its frames are the global TSDF's).
   std::vector<std::string> submap_files;
   std::vector<int> submap_frame_counts;
   std::vector<int> keyframe_submaps;
