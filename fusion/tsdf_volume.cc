@@ -306,13 +306,16 @@ struct TsdfVolume::Impl {
   }
 };
 
-TsdfVolume::TsdfVolume(TsdfOptions options) : options_(options) {
+TsdfVolume::TsdfVolume(TsdfOptions options, Unallocated) : options_(options) {
   options_.Validate();
   if (options_.block_resolution == 0)
     throw std::invalid_argument("TsdfVolume: block_resolution auto must be resolved for the frames' "
                                 "camera first (TsdfOptions::ForFrames)");
-  UseThreads(options_.threads);
   impl_ = std::make_unique<Impl>();
+}
+
+TsdfVolume::TsdfVolume(TsdfOptions options) : TsdfVolume(options, Unallocated{}) {
+  UseThreads(options_.threads);
   impl_->grid = tg::VoxelBlockGrid({"tsdf", "weight", "color"},
                                    {core::Float32, core::Float32, core::Float32}, {{1}, {1}, {3}},
                                    static_cast<float>(options_.voxel_size_m),
@@ -321,8 +324,12 @@ TsdfVolume::TsdfVolume(TsdfOptions options) : options_(options) {
 }
 
 TsdfVolume TsdfVolume::Clone() const {
-  TsdfVolume v(options_);
-  v.impl_->grid = CopyBlocks(impl_->grid, options_, options_.initial_blocks, false);
+  // Open3D touches every block of a grid's capacity when it allocates one, so the copy is made
+  // for exactly the blocks it holds (it grows on demand, as any grid) and no empty grid of
+  // initial_blocks is allocated first: with 16^3 blocks that empty grid alone was 164 MB.
+  TsdfVolume v(options_, Unallocated{});
+  UseThreads(options_.threads);
+  v.impl_->grid = CopyBlocks(impl_->grid, options_, 1, false);
   v.impl_->frames = impl_->frames;
   return v;
 }
@@ -489,6 +496,7 @@ TsdfStats TsdfVolume::Stats() const {
   TsdfStats s;
   s.frames = impl_->frames;
   s.blocks = impl_->grid.GetHashMap().Size();
+  s.capacity_blocks = impl_->grid.GetHashMap().GetCapacity();
   const double voxels = std::pow(static_cast<double>(options_.block_resolution), 3.0);
   // tsdf (4 B) + weight (4 B) + colour (12 B) per voxel, plus the key (3 x int32) per block.
   s.memory_bytes = static_cast<double>(s.blocks) * (voxels * 20.0 + 12.0);
@@ -509,7 +517,7 @@ void TsdfVolume::Save(const std::string& path) const {
 TsdfVolume TsdfVolume::Load(const std::string& path, TsdfOptions options) {
   if (!std::filesystem::exists(path))
     throw std::runtime_error("TsdfVolume::Load: no file " + path);
-  TsdfVolume v(options);
+  TsdfVolume v(options, Unallocated{});  // the loaded grid replaces any allocated here
   try {
     v.impl_->grid = tg::VoxelBlockGrid::Load(path);
   } catch (const std::exception& e) {

@@ -29,7 +29,12 @@ struct TsdfOptions {
   /// same views; coarse frames (128x128, 48x36) leave 8^3 blocks that no ray reached between
   /// their pixels, holes in the surface (docs/RESULTS.md "Blocks sized to the frames").
   int block_resolution = 0;
-  int initial_blocks = 2000;      ///< hash map capacity at start (it grows on demand)
+  /// Hash map capacity at start; it doubles when the blocks fill it. Open3D allocates and writes
+  /// the voxel data of the whole capacity (2000 blocks: 20 MB in 8^3 blocks, 164 MB in 16^3), and
+  /// the frame that fills it waits for the doubling (~0.5 s for a room in 8^3 blocks on the
+  /// project's VMs): a larger value moves that cost to construction (docs/RESULTS.md "What the
+  /// TSDF's memory costs in time").
+  int initial_blocks = 2000;
   /// SDF truncation in voxels (Open3D's trunc_voxel_multiplier): the band fused around each
   /// measured surface. Larger closes thin gaps, smaller keeps thin objects apart.
   double trunc_voxels = 4.0;
@@ -83,6 +88,9 @@ struct TsdfStats {
   int64_t frames = 0;        ///< frames integrated
   int64_t blocks = 0;        ///< allocated voxel blocks
   double memory_bytes = 0;   ///< bytes of voxel data (tsdf + weight + colour, float32) + keys
+  /// Blocks the hash map has room for (Open3D allocates, and touches, the voxel data of all of
+  /// them: the process's memory follows this, not `blocks`); it doubles when the blocks fill it.
+  int64_t capacity_blocks = 0;
   double block_volume_m3 = 0;  ///< volume of the allocated blocks (m^3)
 };
 
@@ -127,6 +135,9 @@ class TsdfVolume {
   static TsdfVolume Load(const std::string& path, TsdfOptions options);
 
  private:
+  /// Options checked, no grid allocated yet: Clone and Load put theirs in.
+  struct Unallocated {};
+  TsdfVolume(TsdfOptions options, Unallocated);
   struct Impl;
   TsdfOptions options_;
   std::unique_ptr<Impl> impl_;

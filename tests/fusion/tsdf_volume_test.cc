@@ -184,6 +184,43 @@ TEST_CASE("TsdfVolume: integration is incremental (a new frame extends what is r
   CHECK(after > before + 0.2 * cam.image_width * cam.image_height);
 }
 
+TEST_CASE("TsdfVolume: a clone raycasts as the original, holds room for its own blocks only, and grows on its own",
+          "[unit]") {
+  const PlaneScene scene;
+  const auto cam = Cam(64, 48, 60);
+  const std::string surface = GENERATE(as<std::string>{}, "raycast", "mesh");
+  INFO("surface " << surface);
+  TsdfVolume vol(WithSurface(surface));
+  CHECK(vol.Stats().capacity_blocks >= vol.options().initial_blocks);
+  vol.Integrate(scene.Render(At(0, 0, 0), cam), cam);
+  const TsdfVolume empty_copy = TsdfVolume(WithSurface(surface)).Clone();
+  CHECK(empty_copy.Stats().blocks == 0);
+  TsdfVolume copy = vol.Clone();
+  const scene::Pose view = At(0.05, 0, 0.1), side = At(0.8, 0, 0);
+  const cv::Mat before = vol.Raycast(view, cam).depth.clone();
+  CHECK(copy.Stats().frames == 1);
+  CHECK(copy.Stats().blocks == vol.Stats().blocks);
+  // Allocated for the blocks it holds, not for initial_blocks (Open3D touches all of them:
+  // with 16^3 blocks 2000 of them are 164 MB, ~1 s to allocate on a VM).
+  CHECK(copy.Stats().capacity_blocks < vol.options().initial_blocks);
+  CHECK(copy.Stats().capacity_blocks >= copy.Stats().blocks);
+  CHECK(cv::norm(copy.Raycast(view, cam).depth, before, cv::NORM_INF) == 0.0);
+  // The copy grows past its capacity on its own; the original does not change.
+  const int64_t blocks = copy.Stats().blocks;
+  copy.Integrate(scene.Render(side, cam), cam);
+  copy.Integrate(scene.Render(At(-0.8, 0, 0), cam), cam);
+  CHECK(copy.Stats().blocks > blocks);
+  CHECK(copy.Stats().capacity_blocks >= copy.Stats().blocks);
+  CHECK(cv::countNonZero(copy.Raycast(side, cam).depth) > cv::countNonZero(vol.Raycast(side, cam).depth));
+  CHECK(vol.Stats().blocks == blocks);
+  CHECK(cv::norm(vol.Raycast(view, cam).depth, before, cv::NORM_INF) == 0.0);
+  // A copy of an empty volume takes frames like a new one.
+  TsdfVolume grown = TsdfVolume(WithSurface(surface)).Clone();
+  grown.Integrate(scene.Render(At(0, 0, 0), cam), cam);
+  CHECK(grown.Stats().blocks == blocks);
+  CHECK(cv::norm(grown.Raycast(view, cam).depth, before, cv::NORM_INF) < 1e-6);
+}
+
 TEST_CASE("TsdfVolume: frames of the wrong size or type are refused naming the frame", "[unit]") {
   TsdfVolume vol(WithSurface("mesh"));
   scene::RgbdSample f = PlaneScene().Render(At(0, 0, 0), Cam(32, 24, 30));
