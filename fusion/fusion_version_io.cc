@@ -47,8 +47,10 @@ std::vector<std::string> UnchangedSubmapFiles(const std::string& previous,
 
 }  // namespace
 
-std::string WriteSceneVersion(const std::string& versions_dir, FusionScene& scene,
-                              const FusionVersionInfo& info) {
+namespace {
+
+/// The manifest of `scene` as a version described by `info`.
+model::FusionVersionManifest SceneManifest(FusionScene& scene, const FusionVersionInfo& info) {
   const TsdfOptions& tsdf = scene.options().tsdf;
   model::FusionVersionManifest m;
   m.version = info.version;
@@ -75,21 +77,67 @@ std::string WriteSceneVersion(const std::string& versions_dir, FusionScene& scen
     m.submap_frames = sub->options().frames;
     if (m.submap_files.empty()) m.keyframe_submaps.clear();  // no frame fused yet: none to save
   }
-  const std::string dir = model::FusionVersionDir(versions_dir, info.version);
+  return m;
+}
+
+/// Commits the version folder of `m` under `versions_dir`: the global TSDF, each submap (linked
+/// from `reusable[i]` when set, else `submap(i)` written) and the refinement file.
+template <typename SubmapVolume>
+std::string CommitVersion(const std::string& versions_dir, const model::FusionVersionManifest& m,
+                          const std::vector<std::string>& reusable, const TsdfVolume& tsdf,
+                          SubmapVolume submap, const std::string& refine_source) {
+  const std::string dir = model::FusionVersionDir(versions_dir, m.version);
   fs::create_directories(versions_dir);
-  const std::vector<std::string> reusable = UnchangedSubmapFiles(info.previous_dir, m);
   model::WriteFusionVersion(dir, m, [&](const std::string& temp) {
-    scene.tsdf().Save(temp + "/" + m.tsdf_file);
+    tsdf.Save(temp + "/" + m.tsdf_file);
     for (size_t i = 0; i < m.submap_files.size(); ++i) {
       const std::string to = temp + "/" + m.submap_files[i];
       std::error_code ec;
       if (!reusable[i].empty()) fs::create_hard_link(reusable[i], to, ec);
-      if (reusable[i].empty() || ec) scene.submaps()->volume(i).Save(to);
+      if (reusable[i].empty() || ec) submap(i).Save(to);
     }
-    if (!info.refine_source.empty())
-      fs::copy_file(info.refine_source, temp + "/" + m.refine_file);
+    if (!refine_source.empty()) fs::copy_file(refine_source, temp + "/" + m.refine_file);
   });
   return dir;
+}
+
+}  // namespace
+
+std::string WriteSceneVersion(const std::string& versions_dir, FusionScene& scene,
+                              const FusionVersionInfo& info) {
+  const model::FusionVersionManifest m = SceneManifest(scene, info);
+  return CommitVersion(versions_dir, m, UnchangedSubmapFiles(info.previous_dir, m), scene.tsdf(),
+                       [&](size_t i) -> const TsdfVolume& { return scene.submaps()->volume(i); },
+                       info.refine_source);
+}
+
+SceneVersionSnapshot SnapshotSceneVersion(const std::string& versions_dir, FusionScene& scene,
+                                          const FusionVersionInfo& info) {
+  SceneVersionSnapshot s;
+  s.versions_dir = versions_dir;
+  s.info = info;
+  s.manifest = SceneManifest(scene, info);
+  s.reusable = UnchangedSubmapFiles(info.previous_dir, s.manifest);
+  s.tsdf = std::make_unique<TsdfVolume>(scene.tsdf().Clone());
+  s.submaps.resize(s.manifest.submap_files.size());
+  for (size_t i = 0; i < s.submaps.size(); ++i)
+    if (s.reusable[i].empty()) s.submaps[i] = std::make_unique<TsdfVolume>(scene.submaps()->volume(i).Clone());
+  return s;
+}
+
+std::string WriteSceneVersion(const SceneVersionSnapshot& snapshot) {
+  if (!snapshot.tsdf) throw std::invalid_argument("WriteSceneVersion: an empty snapshot");
+  return CommitVersion(
+      snapshot.versions_dir, snapshot.manifest, snapshot.reusable, *snapshot.tsdf,
+      [&](size_t i) -> const TsdfVolume& {
+        // A linked file that turns out unreadable at commit time has no copy to fall back on.
+        if (!snapshot.submaps[i])
+          throw std::runtime_error("fusion version " + std::to_string(snapshot.manifest.version) +
+                                   ": submap file " + snapshot.reusable[i] +
+                                   " could not be linked and no copy was taken");
+        return *snapshot.submaps[i];
+      },
+      snapshot.info.refine_source);
 }
 
 LoadedFusionVersion LoadFusionVersion(const std::string& dir, FusionOptions options, int width,

@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "fusion/fusion_synthesizer.h"
 #include "model/fusion_version.h"
@@ -34,6 +35,30 @@ struct FusionVersionInfo {
 /// reusing info.previous_dir's unchanged submap files. Returns the folder. Throws std::runtime_error naming the folder.
 std::string WriteSceneVersion(const std::string& versions_dir, FusionScene& scene,
                               const FusionVersionInfo& info);
+
+/// A FusionScene's version taken at one moment, to be written later (on another thread) while
+/// the scene takes more frames: its manifest and copies (TsdfVolume::Clone: milliseconds in 8^3
+/// blocks, where writing the file takes ~0.5 s for a room) of the volumes whose files change. A
+/// submap unchanged since info.previous_dir is linked from there when written, not copied.
+struct SceneVersionSnapshot {
+  std::string versions_dir;
+  FusionVersionInfo info;
+  model::FusionVersionManifest manifest;
+  std::vector<std::string> reusable;   ///< per submap: the previous version's file, or ""
+  std::unique_ptr<TsdfVolume> tsdf;    ///< copy of the global TSDF
+  std::vector<std::unique_ptr<TsdfVolume>> submaps;  ///< copies (null where reusable is set)
+};
+
+/// Takes the snapshot WriteSceneVersion(snapshot) writes: what WriteSceneVersion(versions_dir,
+/// scene, info) would write now. The scene is read, not changed.
+SceneVersionSnapshot SnapshotSceneVersion(const std::string& versions_dir, FusionScene& scene,
+                                          const FusionVersionInfo& info);
+
+/// Writes a snapshot as WriteSceneVersion(versions_dir, scene, info) writes the scene (same
+/// folder, same files). Safe on any thread: it touches nothing but the snapshot. Throws
+/// std::runtime_error naming the folder, or a submap whose previous file can no longer be linked
+/// (a version pruned between the snapshot and the write).
+std::string WriteSceneVersion(const SceneVersionSnapshot& snapshot);
 
 /// A built version: the synthesizer and the manifest it came from.
 struct LoadedFusionVersion {

@@ -62,6 +62,7 @@ FusionMapper::FusionMapper(FusionMapperOptions options, VersionCallback on_versi
   keyframes_dir_ = (fs::absolute(options_.work_dir) / name).string();
   if (options_.refine_finetune_steps > 0)
     tuner_ = std::make_unique<RefineTuner>(options_.TunerOptions());
+  writer_ = std::thread([this] { WriteVersions(); });
   thread_ = std::thread([this] { Run(); });
 }
 
@@ -79,7 +80,7 @@ void FusionMapper::Submit(scene::RgbdSample frame, const scene::CameraInfo& came
     queue_.pop_front();
     ++stats_.dropped;
   }
-  queue_.push_back({std::move(frame), camera});
+  queue_.push_back({std::move(frame), camera, wait});
   cv_.notify_all();
 }
 
@@ -89,7 +90,13 @@ void FusionMapper::Stop() {
     stopping_ = true;
   }
   cv_.notify_all();
-  if (thread_.joinable()) thread_.join();
+  if (thread_.joinable()) thread_.join();  // its last version is handed to the writer
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    writer_stop_ = true;
+  }
+  write_cv_.notify_all();
+  if (writer_.joinable()) writer_.join();  // writes what is pending first
   if (tuner_) tuner_->Stop();
 }
 
@@ -125,7 +132,7 @@ void FusionMapper::Run() {
       if (queue_.empty()) {
         if (stopping_) break;  // everything queued integrated
         lock.unlock();
-        if (scene_ && tuner_->LatestNet().steps > published_refine_steps_) Publish();
+        if (scene_ && (tuner_->LatestNet().steps > published_refine_steps_ || RetryDue())) Publish(false);
         continue;
       }
       job = std::move(queue_.front());
@@ -133,9 +140,19 @@ void FusionMapper::Run() {
     }
     cv_.notify_all();  // a waiting Submit may queue now
     Integrate(job);
-    if (unpublished_ >= static_cast<uint64_t>(options_.publish_every_frames)) Publish();
+    if (unpublished_ >= static_cast<uint64_t>(options_.publish_every_frames) || RetryDue())
+      Publish(job.wait);
   }
-  if (unpublished_ > 0) Publish();
+  {
+    std::unique_lock<std::mutex> lock(mutex_);
+    write_cv_.wait(lock, [this] { return !writing_; });  // a failed write is tried once more below
+  }
+  if (unpublished_ > 0 || RetryDue()) Publish(true);
+}
+
+bool FusionMapper::RetryDue() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return retry_ && !writing_;
 }
 
 void FusionMapper::Integrate(const Job& job) {
@@ -171,13 +188,25 @@ void FusionMapper::Integrate(const Job& job) {
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 
-void FusionMapper::Publish() {
+void FusionMapper::Publish(bool wait) {
+  if (!scene_) return;  // every frame so far was refused: nothing to write
   fusion::FusionVersionInfo info;
-  info.version = next_version_;
+  {
+    std::unique_lock<std::mutex> lock(mutex_);
+    if (writing_) {
+      if (!wait) return;  // taken at the first frame after that write
+      write_cv_.wait(lock, [this] { return !writing_; });
+    }
+    unpublished_ += retry_frames_;  // a failed write's frames go out with this version
+    retry_frames_ = 0;
+    retry_ = false;
+    info.version = next_version_;
+    info.previous_dir = last_version_dir_;
+    info.frames_integrated = stats_.integrated;
+  }
   info.keyframes_dir = keyframes_dir_;
   info.keyframe_count = keyframes_->size();
   info.refine_source = options_.refine_net;
-  info.previous_dir = last_version_dir_;
   if (tuner_) {
     const RefineTuner::Net net = tuner_->LatestNet();
     if (!net.path.empty()) {
@@ -185,33 +214,71 @@ void FusionMapper::Publish() {
       info.refine_steps = net.steps;
     }
   }
-  {
-    std::lock_guard<std::mutex> lock(mutex_);
-    info.frames_integrated = stats_.integrated;
-  }
-  std::string dir;
+  std::unique_ptr<fusion::SceneVersionSnapshot> snapshot;
   try {
-    dir = fusion::WriteSceneVersion(versions_dir_, *scene_, info);
+    snapshot = std::make_unique<fusion::SceneVersionSnapshot>(
+        fusion::SnapshotSceneVersion(versions_dir_, *scene_, info));
   } catch (const std::exception& e) {
     std::lock_guard<std::mutex> lock(mutex_);
     stats_.last_error = std::string("version ") + std::to_string(info.version) + ": " + e.what();
-    return;  // retried after the next publish_every_frames frames (a new net's alone: in 0.2 s)
+    return;  // unpublished_ kept: tried again at the next frame
   }
-  ++next_version_;
-  last_version_dir_ = dir;
-  const bool new_frames = unpublished_ > 0;
+  const uint64_t frames = unpublished_;
   unpublished_ = 0;
   published_refine_steps_ = info.refine_steps;
-  {
-    std::lock_guard<std::mutex> lock(mutex_);
-    ++stats_.versions;
-    stats_.last_version = info.version;
-  }
-  Prune();
   // The next round tunes on the keyframes of this version; only when new frames came: a version
   // for a new net alone would otherwise start a round on the same keyframes, for ever.
-  if (tuner_ && new_frames) tuner_->Offer(scene_->keyframes(), scene_->frame_camera());
-  if (on_version_) on_version_(model::ReadFusionVersion(dir), dir);
+  if (tuner_ && frames > 0) tuner_->Offer(scene_->keyframes(), scene_->frame_camera());
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    pending_ = std::move(snapshot);
+    pending_frames_ = frames;
+    writing_ = true;
+  }
+  write_cv_.notify_all();
+}
+
+void FusionMapper::WriteVersions() {
+  for (;;) {
+    std::unique_ptr<fusion::SceneVersionSnapshot> job;
+    uint64_t frames = 0;
+    {
+      std::unique_lock<std::mutex> lock(mutex_);
+      write_cv_.wait(lock, [this] { return writer_stop_ || pending_ != nullptr; });
+      if (!pending_) break;  // stopping, nothing left to write
+      job = std::move(pending_);
+      frames = pending_frames_;
+    }
+    std::string dir, error;
+    try {
+      dir = fusion::WriteSceneVersion(*job);
+    } catch (const std::exception& e) {
+      error = std::string("version ") + std::to_string(job->info.version) + ": " + e.what();
+    }
+    if (error.empty()) {
+      {
+        std::lock_guard<std::mutex> lock(mutex_);
+        next_version_ = job->info.version + 1;
+        last_version_dir_ = dir;
+        ++stats_.versions;
+        stats_.last_version = job->info.version;
+      }
+      job.reset();  // the copies' memory goes before the next snapshot's
+      Prune();
+      if (on_version_) on_version_(model::ReadFusionVersion(dir), dir);
+    }
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      if (!error.empty()) {
+        stats_.last_error = error;
+        retry_frames_ += frames;
+        retry_ = true;
+      }
+      writing_ = false;
+    }
+    write_cv_.notify_all();
+    cv_.notify_all();  // a mapping thread idle with a failed write retries at its next wake
+  }
 }
 
 /// Old versions beyond keep_versions, and keyframe folders of earlier sessions that no kept

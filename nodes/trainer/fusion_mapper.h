@@ -3,6 +3,8 @@
 /// into a TSDF as it arrives; frames far enough from the keyframes so far are appended to an
 /// append-only keyframe capture; every `publish_every_frames` integrated frames the TSDF is
 /// written as a committed model version (model/fusion_version.h) that the synthesizer hot-swaps.
+/// The mapping thread only copies the volumes for a version (milliseconds); a writer thread
+/// writes it (~0.5 s for a room), so a camera's frames keep being integrated meanwhile.
 #pragma once
 
 #include <condition_variable>
@@ -15,6 +17,7 @@
 #include <thread>
 
 #include "fusion/fusion_scene.h"
+#include "fusion/fusion_version_io.h"
 #include "model/fusion_version.h"
 #include "nodes/trainer/refine_tuner.h"
 #include "scene/camera_info.h"
@@ -55,8 +58,9 @@ struct FusionMapperOptions {
   RefineTunerOptions TunerOptions() const;
 };
 
-/// Thread-safety: Submit and GetStats from any thread; integration and version writing run on
-/// the mapper's own thread; `on_version` is called there.
+/// Thread-safety: Submit and GetStats from any thread; integration runs on the mapper's own
+/// thread, version writing on a writer thread of its own, one version at a time; `on_version` is
+/// called on the writer thread, in version order.
 class FusionMapper {
  public:
   /// Called after each committed version, with its folder.
@@ -87,7 +91,10 @@ class FusionMapper {
   ~FusionMapper();  ///< Stop()
 
   /// Queues one frame (rgb CV_8UC3, depth CV_32FC1 metres, pose camera-to-world) of `camera`.
-  /// With `wait`, blocks while the queue is full instead of dropping (offline data).
+  /// With `wait`, blocks while the queue is full instead of dropping (offline data), and a
+  /// version due at this frame waits for the one being written, so versions fall every
+  /// publish_every_frames frames exactly. Without it (a camera), a version due while another is
+  /// being written is taken at the first frame after that write.
   void Submit(scene::RgbdSample frame, const scene::CameraInfo& camera, bool wait = false);
   /// Integrates what is queued, writes a last version when frames were integrated since the
   /// previous one, and ends the thread (and the fine-tuning's: a round in progress is dropped).
@@ -100,10 +107,15 @@ class FusionMapper {
   struct Job {
     scene::RgbdSample frame;
     scene::CameraInfo camera;
+    bool wait = false;
   };
   void Run();
   void Integrate(const Job& job);
-  void Publish();
+  /// Snapshots the scene for the writer thread (mapping thread). When a version is being written
+  /// it returns at once, unless `wait`, which waits for that write first.
+  void Publish(bool wait);
+  bool RetryDue() const;
+  void WriteVersions();  // the writer thread
   void Prune();
 
   FusionMapperOptions options_;
@@ -124,8 +136,18 @@ class FusionMapper {
   std::unique_ptr<RefineTuner> tuner_;  // set when refine_finetune_steps > 0
   int64_t published_refine_steps_ = 0;  // of the fine-tuned net in the newest version
   uint64_t unpublished_ = 0;
-  std::string last_version_dir_;  // the newest version written: its unchanged submaps are reused
   std::thread thread_;
+
+  // Under mutex_: the writer thread's work and what it sets after a write.
+  std::condition_variable write_cv_;
+  std::unique_ptr<fusion::SceneVersionSnapshot> pending_;  // the version to write next
+  uint64_t pending_frames_ = 0;   // frames integrated since the version before it
+  bool writing_ = false;          // a snapshot is pending or being written
+  bool writer_stop_ = false;
+  uint64_t retry_frames_ = 0;     // a failed write's frames, published again with the next one
+  bool retry_ = false;            // the last write failed: publish again at the next chance
+  std::string last_version_dir_;  // the newest version written: its unchanged submaps are reused
+  std::thread writer_;
 };
 
 }  // namespace p2i::trainer

@@ -275,4 +275,53 @@ TEST_CASE("fusion version: per-capture submaps (the default) are saved from the 
   CHECK_FALSE(single.synthesizer->scene().uses_submaps());
 }
 
+TEST_CASE("fusion version: a snapshot writes the scene as it was when taken, while the scene goes on",
+          "[unit]") {
+  const std::string dir = p2i::testing::FreshDir("fusion_version_snapshot");
+  const auto sim = scene::SimScene::BuiltIn("small_office");
+  const scene::CameraInfo cam = scene::SimScene::DefaultCamera(80, 60);
+  const auto sweep = scene::GenerateArmSweep({});
+  FusionSceneOptions options;
+  options.tsdf.voxel_size_m = 0.03;
+  options.tsdf.block_resolution = 8;
+  FusionScene fused(cam, options);
+  scene::CaptureWriter keyframes(dir + "/keyframes", cam);
+  std::vector<scene::RgbdSample> frames;
+  for (size_t i = 0; i < sweep.size(); i += 8) frames.push_back(sim.Render(sweep[i].pose, cam, sweep[i].stamp));
+  const size_t half = frames.size() / 2;
+  for (size_t i = 0; i < half; ++i) {
+    fused.AddFrame(frames[i]);
+    keyframes.Append(frames[i]);
+  }
+  FusionVersionInfo info;
+  info.version = 1;
+  info.frames_integrated = half;
+  info.keyframes_dir = dir + "/keyframes";
+  info.keyframe_count = half;
+  const SceneVersionSnapshot snapshot = SnapshotSceneVersion(dir + "/versions", fused, info);
+  info.version = 2;
+  const std::string direct = WriteSceneVersion(dir + "/versions", fused, info);  // the same moment
+  for (size_t i = half; i < frames.size(); ++i) fused.AddFrame(frames[i]);     // the scene goes on
+  const std::string written = WriteSceneVersion(snapshot);
+  CHECK(fs::path(written).filename() == "fusion_v000001");
+  CHECK(model::ReadFusionVersion(written).frames_integrated == half);
+
+  // The snapshot's TSDF is the scene's at the snapshot: as the direct write's, short of the frames
+  // integrated after it.
+  const TsdfOptions tsdf = fused.tsdf().options();
+  TsdfVolume from_snapshot = TsdfVolume::Load(written + "/tsdf.npz", tsdf);
+  TsdfVolume from_direct = TsdfVolume::Load(direct + "/tsdf.npz", tsdf);
+  const scene::Pose late = frames.back().pose;
+  const cv::Mat a = from_snapshot.Raycast(late, cam).depth, b = from_direct.Raycast(late, cam).depth;
+  CHECK(cv::norm(a, b, cv::NORM_INF) < 1e-6);
+  CHECK(from_snapshot.Stats().blocks == from_direct.Stats().blocks);
+  CHECK(from_snapshot.Stats().blocks < fused.tsdf().Stats().blocks);
+  CHECK(cv::countNonZero(a) < cv::countNonZero(fused.tsdf().Raycast(late, cam).depth));
+
+  // It builds like any version.
+  LoadedFusionVersion v = LoadFusionVersion(written, FusionOptions{});
+  CHECK(v.synthesizer->scene().keyframes().size() == half);
+  CHECK_THROWS_WITH(WriteSceneVersion(SceneVersionSnapshot{}), Catch::Contains("empty snapshot"));
+}
+
 }  // namespace p2i::fusion

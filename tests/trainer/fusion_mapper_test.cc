@@ -5,6 +5,7 @@
 /// fine-tuning of the refinement (refine_tuner.h) carried by the versions.
 #include <catch2/catch.hpp>
 
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -100,6 +101,39 @@ TEST_CASE("fusion mapper: a version every N frames and at Stop, pruned, loadable
   CHECK(model::ListFusionVersions(dir + "/versions") == std::vector<uint64_t>{4, 5});
   CHECK_FALSE(fs::exists(dir + "/keyframes_s000001"));
   CHECK(fs::exists(dir + "/keyframes_s000004"));
+}
+
+TEST_CASE("fusion mapper: a camera's frames are integrated while a version is being written", "[unit]") {
+  const std::string dir = testing::TempDir("fusion_mapper_async");
+  const scene::RgbdDataset frames = testing::SimFrames(12);
+  FusionMapperOptions o = Options(dir);
+  o.queue_frames = 16;  // nothing dropped: what is measured is whether they are integrated
+  std::atomic<bool> release{false};
+  std::atomic<int> calls{0};
+  FusionMapper mapper(o, [&](const model::FusionVersionManifest&, const std::string&) {
+    ++calls;
+    while (!release) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  });
+  for (size_t i = 0; i < 5; ++i) mapper.Submit(frames.frames[i], frames.camera, true);
+  // Version 1's write holds the writer thread (its callback, the last step of a write, waits).
+  REQUIRE(WaitUntil([&] { return calls.load() == 1; }, 60));
+  for (size_t i = 5; i < 12; ++i) mapper.Submit(frames.frames[i], frames.camera);  // as a camera
+  const bool integrated_meanwhile = WaitUntil([&] { return mapper.GetStats().integrated == 12; }, 30);
+  const FusionMapper::Stats during = mapper.GetStats();
+  release = true;
+  CHECK(integrated_meanwhile);
+  CHECK(during.versions == 1);
+  mapper.Stop();
+  const FusionMapper::Stats st = mapper.GetStats();
+  CHECK(st.dropped == 0);
+  // Version 2 was due at frame 10 with version 1 still being written: it was taken at the first
+  // frame after that write, or at Stop with the last frames.
+  CHECK(st.versions >= 2);
+  CHECK(st.versions <= 3);
+  CHECK(calls.load() == static_cast<int>(st.versions));
+  const std::vector<uint64_t> kept = model::ListFusionVersions(dir + "/versions");
+  REQUIRE_FALSE(kept.empty());
+  CHECK(model::ReadFusionVersion(model::FusionVersionDir(dir + "/versions", kept.back())).frames_integrated == 12);
 }
 
 TEST_CASE("fusion mapper: another camera is refused, a full queue drops the oldest", "[unit]") {
