@@ -264,8 +264,14 @@ void FusionMapper::WriteVersions() {
         stats_.last_version = job->info.version;
       }
       job.reset();  // the copies' memory goes before the next snapshot's
-      Prune();
-      if (on_version_) on_version_(model::ReadFusionVersion(dir), dir);
+      try {
+        Prune();
+        if (on_version_) on_version_(model::ReadFusionVersion(dir), dir);
+      } catch (const std::exception& e) {
+        // The version is committed; what failed after it must not end the writer thread.
+        std::lock_guard<std::mutex> lock(mutex_);
+        stats_.last_error = "version " + dir + " written, then: " + e.what();
+      }
     }
     {
       std::lock_guard<std::mutex> lock(mutex_);

@@ -136,6 +136,24 @@ TEST_CASE("fusion mapper: a camera's frames are integrated while a version is be
   CHECK(model::ReadFusionVersion(model::FusionVersionDir(dir + "/versions", kept.back())).frames_integrated == 12);
 }
 
+TEST_CASE("fusion mapper: a version callback that throws is counted, and the next versions still come",
+          "[unit]") {
+  const std::string dir = testing::TempDir("fusion_mapper_callback_throws");
+  const scene::RgbdDataset frames = testing::SimFrames(12);
+  std::vector<uint64_t> seen;
+  FusionMapper mapper(Options(dir), [&](const model::FusionVersionManifest& m, const std::string&) {
+    seen.push_back(m.version);
+    if (m.version == 1) throw std::runtime_error("the transport is gone");
+  });
+  for (const auto& f : frames.frames) mapper.Submit(f, frames.camera, true);
+  mapper.Stop();
+  const FusionMapper::Stats st = mapper.GetStats();
+  CHECK(seen == std::vector<uint64_t>{1, 2, 3});  // at 5, 10 and at Stop
+  CHECK(st.versions == 3);
+  CHECK(st.integrated == 12);
+  CHECK_THAT(st.last_error, Catch::Contains("the transport is gone"));
+}
+
 TEST_CASE("fusion mapper: another camera is refused, a full queue drops the oldest", "[unit]") {
   const std::string dir = testing::TempDir("fusion_mapper_refuse");
   const scene::RgbdDataset frames = testing::SimFrames(30);
