@@ -18,6 +18,14 @@ namespace {
 
 namespace fs = std::filesystem;
 
+/// The tests' fused scene: 3 cm voxels in 8^3 blocks (small and quick), other options default.
+FusionSceneOptions CoarseOptions() {
+  FusionSceneOptions options;
+  options.tsdf.voxel_size_m = 0.03;
+  options.tsdf.block_resolution = 8;
+  return options;
+}
+
 }  // namespace
 
 TEST_CASE("fusion version: written from a scene, built back with the same views", "[unit]") {
@@ -25,9 +33,7 @@ TEST_CASE("fusion version: written from a scene, built back with the same views"
   const auto sim = scene::SimScene::BuiltIn("small_office");
   const scene::CameraInfo cam = scene::SimScene::DefaultCamera(80, 60);
   const auto sweep = scene::GenerateArmSweep({});
-  FusionSceneOptions options;
-  options.tsdf.voxel_size_m = 0.03;
-  options.tsdf.block_resolution = 8;
+  FusionSceneOptions options = CoarseOptions();
   FusionScene fused(cam, options);
   scene::CaptureWriter keyframes(dir + "/keyframes", cam);
   scene::RgbdDataset frames;
@@ -79,9 +85,7 @@ TEST_CASE("fusion version: local submaps are saved and built back", "[unit]") {
   const auto sim = scene::SimScene::BuiltIn("small_office");
   const scene::CameraInfo cam = scene::SimScene::DefaultCamera(80, 60);
   const auto sweep = scene::GenerateArmSweep({});
-  FusionSceneOptions options;
-  options.tsdf.voxel_size_m = 0.03;
-  options.tsdf.block_resolution = 8;
+  FusionSceneOptions options = CoarseOptions();
   options.submaps.frames = 6;
   options.submaps.use = "always";
   options.submaps.render = 1;
@@ -225,9 +229,7 @@ TEST_CASE("fusion version: per-capture submaps (the default) are saved from the 
   const auto sim = scene::SimScene::BuiltIn("small_office");
   const scene::CameraInfo cam = scene::SimScene::DefaultCamera(80, 60);
   const auto sweep = scene::GenerateArmSweep({});
-  FusionSceneOptions options;  // submaps: {frames: capture, use: auto}
-  options.tsdf.voxel_size_m = 0.03;
-  options.tsdf.block_resolution = 8;
+  FusionSceneOptions options = CoarseOptions();  // submaps: {frames: capture, use: auto}
   FusionScene fused(cam, options);
   scene::CaptureWriter keyframes(dir + "/keyframes", cam);
   const size_t n = sweep.size() / 8;
@@ -281,9 +283,7 @@ TEST_CASE("fusion version: a snapshot writes the scene as it was when taken, whi
   const auto sim = scene::SimScene::BuiltIn("small_office");
   const scene::CameraInfo cam = scene::SimScene::DefaultCamera(80, 60);
   const auto sweep = scene::GenerateArmSweep({});
-  FusionSceneOptions options;
-  options.tsdf.voxel_size_m = 0.03;
-  options.tsdf.block_resolution = 8;
+  FusionSceneOptions options = CoarseOptions();
   FusionScene fused(cam, options);
   scene::CaptureWriter keyframes(dir + "/keyframes", cam);
   std::vector<scene::RgbdSample> frames;
