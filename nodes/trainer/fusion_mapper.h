@@ -17,7 +17,6 @@
 #include <thread>
 
 #include "fusion/fusion_scene.h"
-#include "fusion/fusion_version_io.h"
 #include "model/fusion_version.h"
 #include "nodes/trainer/refine_tuner.h"
 #include "scene/camera_info.h"
@@ -26,6 +25,10 @@
 namespace p2i::scene {
 class CaptureWriter;
 }  // namespace p2i::scene
+
+namespace p2i::fusion {
+struct SceneVersionSnapshot;
+}  // namespace p2i::fusion
 
 namespace p2i::trainer {
 
