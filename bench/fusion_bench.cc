@@ -42,6 +42,7 @@
 #include "scene/image_ops.h"
 #include "scene/sim_scene.h"
 #include "scene/trajectory.h"
+#include "util/heap_policy.h"
 #include "util/order_stats.h"
 
 namespace {
@@ -364,6 +365,7 @@ std::vector<Row> RenderRows(const Args& a) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (!p2i::util::ApplyHeapPolicyOrReport("fusion_bench")) return 2;  // P2I_HEAP
   Args a;
   if (!ParseArgs(argc, argv, &a)) {
     std::cerr << "usage: OMP_NUM_THREADS=1 fusion_bench [--scene NAME] [--frames N] [--views N] "

@@ -29,6 +29,7 @@
 #include "model/model_profiling.h"
 #include "model/p2i_config.h"
 #include "model/p2i_synthesizer.h"
+#include "util/heap_policy.h"
 #include "util/order_stats.h"
 
 using namespace p2i;
@@ -185,6 +186,7 @@ void BenchModel(const Row& row, const Options& o, const std::string& tmp, std::o
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (!p2i::util::ApplyHeapPolicyOrReport("model_bench")) return 2;  // P2I_HEAP
   Options o;
   if (!ParseArgs(argc, argv, &o)) return 1;
   std::printf("matmul rate: %dx%d on %d threads, median of %d runs before + %d after each "

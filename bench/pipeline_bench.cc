@@ -43,6 +43,7 @@
 #include "msgs/codec.h"
 #include "nodes/runtime/service_client.h"
 #include "scene/trajectory.h"
+#include "util/heap_policy.h"
 
 namespace {
 
@@ -365,6 +366,7 @@ std::vector<Row> MeasureAll(const Paths& p, const Options& o, const std::string&
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (!p2i::util::ApplyHeapPolicyOrReport("pipeline_bench")) return 2;  // P2I_HEAP
   Options o;
   const int parse = ParseArgs(argc, argv, &o);
   if (parse >= 0) return parse;

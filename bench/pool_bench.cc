@@ -33,6 +33,7 @@
 #include "convert/pose.h"
 #include "nodes/runtime/service_client.h"
 #include "scene/trajectory.h"
+#include "util/heap_policy.h"
 
 namespace {
 
@@ -182,6 +183,7 @@ nlohmann::json ReportRow(const Options& o, int k, const Load& m) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (!p2i::util::ApplyHeapPolicyOrReport("pool_bench")) return 2;  // P2I_HEAP
   Options o;
   const int parse = ParseArgs(argc, argv, &o);
   if (parse >= 0) return parse;

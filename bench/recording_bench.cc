@@ -38,6 +38,7 @@
 #include "scene/sim_scene.h"
 #include "scene/trajectory.h"
 #include "tests/foxglove_bridge/raw_ws_client.h"
+#include "util/heap_policy.h"
 
 using namespace p2i;
 using Clock = std::chrono::steady_clock;
@@ -310,6 +311,7 @@ nlohmann::json BenchBridge(const Frames& frames, int clients, double seconds,
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (!p2i::util::ApplyHeapPolicyOrReport("recording_bench")) return 2;  // P2I_HEAP
   double seconds = 20, bridge_seconds = 8;
   std::string out = "recording_bench_out", compression = "zstd";
   for (int i = 1; i < argc; i += 2) {

@@ -20,6 +20,7 @@
 
 #include "scene/sim_scene.h"
 #include "scene/trajectory.h"
+#include "util/heap_policy.h"
 
 namespace {
 
@@ -82,6 +83,7 @@ void BenchSize(const p2i::scene::SimScene& scene,
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (!p2i::util::ApplyHeapPolicyOrReport("render_bench")) return 2;  // P2I_HEAP
   std::string scene_name = "small_office", csv_path = "render_bench.csv";
   int frames = 60;
   std::string sensor;  // "" = exact, kinect, realistic

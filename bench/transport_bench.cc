@@ -22,6 +22,7 @@
 #include "nodes/runtime/raw_publisher.h"
 #include "nodes/runtime/raw_service.h"
 #include "nodes/runtime/raw_subscriber.h"
+#include "util/heap_policy.h"
 #include "util/order_stats.h"
 
 namespace {
@@ -233,6 +234,7 @@ Row Service(const std::string& transport, const std::string& endpoint, int calls
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (!p2i::util::ApplyHeapPolicyOrReport("transport_bench")) return 2;  // P2I_HEAP
   std::string out_path;
   int frames = 1000, calls = 5000;
   for (int i = 1; i < argc; ++i) {

@@ -11,6 +11,7 @@
 
 #include "tools/command.h"
 #include "tools/launch_error.h"
+#include "util/heap_policy.h"
 
 namespace {
 
@@ -30,6 +31,7 @@ int main(int argc, char** argv) {
     return argc < 2 ? 2 : 0;
   }
   const std::string name = argv[1];
+  if (!p2i::util::ApplyHeapPolicyOrReport("p2i " + name)) return 2;  // P2I_HEAP
   auto it = p2i::tools::Commands().find(name);
   if (it == p2i::tools::Commands().end()) {
     std::fprintf(stderr, "p2i: unknown command '%s'\n\n", name.c_str());

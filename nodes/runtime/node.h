@@ -25,6 +25,7 @@
 #include "nodes/runtime/raw_service.h"
 #include "nodes/runtime/raw_subscriber.h"
 #include "nodes/runtime/service_client.h"
+#include "util/heap_policy.h"
 
 namespace p2i::runtime {
 
@@ -260,6 +261,7 @@ template <class NodeT>
 int RunNode(int argc, char** argv) {
   std::string exe = argc > 0 ? argv[0] : "node";
   if (exe.find('/') != std::string::npos) exe = exe.substr(exe.rfind('/') + 1);
+  if (!util::ApplyHeapPolicyOrReport(exe)) return 2;  // P2I_HEAP, before any thread starts
   NodeArgs args;
   try {
     args = NodeArgs::Parse(argc, argv);

@@ -241,6 +241,22 @@ TEST_CASE("Node process: unknown parameter exits 2 naming it and its source", "[
   CHECK(err.find(file) != std::string::npos);
 }
 
+TEST_CASE("Node process: a bad P2I_HEAP exits 2 naming the variable and its choices",
+          "[integration]") {
+  Shutdown::ResetForTesting();
+  ScopedRunDir run_dir;
+  setenv("P2I_HEAP", "fast", 1);
+  ChildNode child({"frame_id:=cam"});
+  const int code = child.Wait(std::chrono::milliseconds(5000));
+  unsetenv("P2I_HEAP");
+  CHECK(code == 2);
+  const std::string err = child.Stderr();
+  INFO(err);
+  CHECK(err.find("configuration error") != std::string::npos);
+  CHECK(err.find("P2I_HEAP='fast'") != std::string::npos);
+  CHECK(err.find("P2I_HEAP=system") != std::string::npos);
+}
+
 TEST_CASE("Node process: remapped topic and service reach another process", "[integration]") {
   Shutdown::ResetForTesting();
   ScopedRunDir run_dir;
