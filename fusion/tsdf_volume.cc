@@ -39,6 +39,7 @@
 #include "fusion/frustum.h"
 #include "fusion/surface_mesh.h"
 #include "fusion/tsdf_field.h"
+#include "fusion/tsdf_integrate.h"
 #include "scene/strict_yaml_reader.h"
 
 namespace p2i::fusion {
@@ -140,7 +141,8 @@ TsdfOptions TsdfOptions::FromYaml(const YAML::Node& node, const std::string& sou
   const scene::StrictYamlReader r(source);
   r.CheckKeys(node,
               {"voxel_size_m", "block_resolution", "initial_blocks", "trunc_voxels", "depth_min_m",
-               "depth_max_m", "weight_threshold", "crack_fill_passes", "threads", "refine_hits", "surface"},
+               "depth_max_m", "weight_threshold", "crack_fill_passes", "threads", "refine_hits", "surface",
+               "integrator"},
               "tsdf options");
   TsdfOptions o;
   r.OptionalDouble(node, "voxel_size_m", "tsdf", &o.voxel_size_m);
@@ -157,6 +159,7 @@ TsdfOptions TsdfOptions::FromYaml(const YAML::Node& node, const std::string& sou
   if (node["threads"]) o.threads = r.Int(node["threads"], "threads");
   if (node["refine_hits"]) o.refine_hits = Bool(r, node["refine_hits"], "refine_hits");
   if (node["surface"]) o.surface = r.String(node["surface"], "surface");
+  if (node["integrator"]) o.integrator = r.String(node["integrator"], "integrator");
   try {
     o.Validate();
   } catch (const std::invalid_argument& e) {
@@ -181,6 +184,8 @@ void TsdfOptions::Validate() const {
   if (threads < 1) fail("threads must be >= 1");
   if (surface != "raycast" && surface != "mesh")
     fail("surface must be raycast or mesh, got '" + surface + "'");
+  if (integrator != "p2i" && integrator != "open3d")
+    fail("integrator must be p2i or open3d, got '" + integrator + "'");
 }
 
 namespace {
@@ -338,6 +343,48 @@ TsdfVolume::~TsdfVolume() = default;
 TsdfVolume::TsdfVolume(TsdfVolume&&) noexcept = default;
 TsdfVolume& TsdfVolume::operator=(TsdfVolume&&) noexcept = default;
 
+namespace {
+
+/// TsdfOptions::integrator "p2i": VoxelBlockGrid::Integrate with the kernel of tsdf_integrate.h.
+void IntegrateWithOwnKernel(tg::VoxelBlockGrid& grid, const TsdfOptions& options, const core::Tensor& block_coords,
+                            const cv::Mat& depth, const cv::Mat& colour, const scene::CameraInfo& camera,
+                            const core::Tensor& extrinsic) {
+  // What VoxelBlockGrid::Integrate does before its kernel: activate the blocks (the hash map
+  // grows here when they do not fit), then find every one's buffer index.
+  core::HashMap& map = *grid.block_hashmap_;
+  core::Tensor buf, mask;
+  map.Activate(block_coords, buf, mask);
+  map.Find(block_coords, buf, mask);
+  std::vector<core::Tensor> values = map.GetValueTensors();  // tsdf, weight, color
+  const core::Tensor keys = map.GetKeyTensor();
+  VoxelBlocks g;
+  g.resolution = options.block_resolution;
+  g.voxel_size = static_cast<float>(options.voxel_size_m);
+  g.sdf_trunc = g.voxel_size * static_cast<float>(options.trunc_voxels);
+  g.keys = keys.GetDataPtr<int>();
+  g.tsdf = values.at(0).GetDataPtr<float>();
+  g.weight = values.at(1).GetDataPtr<float>();
+  g.colour = values.at(2).GetDataPtr<float>();
+  IntegrationFrame f;
+  f.depth = depth.ptr<float>();
+  f.colour = colour.ptr<float>();
+  f.width = depth.cols;
+  f.height = depth.rows;
+  f.fx = camera.fx();
+  f.fy = camera.fy();
+  f.cx = camera.cx() + 0.5;  // IntegrationIntrinsic's shift
+  f.cy = camera.cy() + 0.5;
+  const core::Tensor e = extrinsic.Contiguous();
+  const double* ep = e.GetDataPtr<double>();
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 4; ++j) f.extrinsic[i][j] = ep[4 * i + j];
+  f.depth_max_m = static_cast<float>(options.depth_max_m);
+  const core::Tensor indices = buf.To(core::Int32).Contiguous();
+  IntegrateBlocks(g, indices.GetDataPtr<int>(), indices.GetLength(), f, options.threads);
+}
+
+}  // namespace
+
 void TsdfVolume::Integrate(const scene::RgbdSample& frame, const scene::CameraInfo& camera) {
   scene::CheckFitsCamera(frame, camera, "TsdfVolume::Integrate: frame");
   UseThreads(options_.threads);
@@ -357,7 +404,11 @@ void TsdfVolume::Integrate(const scene::RgbdSample& frame, const scene::CameraIn
     ++impl_->frames;  // nothing valid in range: the frame adds nothing
     return;
   }
-  impl_->grid.Integrate(blocks, di, ci, IntegrationIntrinsic(camera), e, 1.0f, dmax, trunc);
+  if (options_.integrator == "open3d") {
+    impl_->grid.Integrate(blocks, di, ci, IntegrationIntrinsic(camera), e, 1.0f, dmax, trunc);
+  } else {
+    IntegrateWithOwnKernel(impl_->grid, options_, blocks, depth, colour, camera, e);
+  }
   ++impl_->frames;
 }
 
