@@ -130,12 +130,14 @@ void IntegrateBlocks(const VoxelBlocks& grid, const int* blocks, int64_t n, cons
       for (int j = 0; j < 3; ++j)
         p[i] += camera.e[i][j] * (static_cast<float>(key[j] * grid.resolution) * grid.voxel_size + half);
     }
+    // Clamped before the conversion (NaN to 0): a centre near the camera's plane projects far out.
+    const auto pixel = [](float x) { return static_cast<int64_t>(x > 0.0f ? std::min(x, 1e9f) : 0.0f); };
     int64_t row = 0, col = 0;
     if (p[2] > 0.0f) {
-      row = static_cast<int64_t>(std::max(0.0f, (camera.fy * p[1] / p[2] + camera.cy) / 16.0f));
-      col = static_cast<int64_t>(std::max(0.0f, camera.fx * p[0] / p[2] + camera.cx));
+      row = pixel((camera.fy * p[1] / p[2] + camera.cy) / 16.0f);
+      col = pixel(camera.fx * p[0] / p[2] + camera.cx);
     }
-    order[static_cast<size_t>(b)] = {std::min<int64_t>(row, 1 << 20) * (int64_t{1} << 32) + std::min<int64_t>(col, 1 << 30), blocks[b]};
+    order[static_cast<size_t>(b)] = {(row << 30) + col, blocks[b]};
   }
   std::sort(order.begin(), order.end());
 #pragma omp parallel for num_threads(threads) schedule(static)
