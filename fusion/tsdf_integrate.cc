@@ -100,9 +100,9 @@ void IntegrateBlock(const VoxelBlocks& g, int block, const IntegrationFrame& f, 
         if (colour != nullptr && f.colour != nullptr) {
           const int cu = cp.u[ui], cv = cp.v[vi];
           if (cu >= 0 && cv >= 0) {
-            const float* in = f.colour + 3 * (static_cast<int64_t>(cv) * f.width + cu);
+            const std::uint8_t* in = f.colour + 3 * (static_cast<int64_t>(cv) * f.width + cu);
             float* out = colour + 3 * i;
-            for (int k = 0; k < 3; ++k) out[k] = (w * out[k] + in[k] * 255.0f) * inv_wsum;
+            for (int k = 0; k < 3; ++k) out[k] = (w * out[k] + f.colour_values[in[k]] * 255.0f) * inv_wsum;
           }
         }
         weight[i] = w + 1;

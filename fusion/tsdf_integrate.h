@@ -20,7 +20,10 @@ namespace p2i::fusion {
 /// The frame, as Open3D's kernel takes it.
 struct IntegrationFrame {
   const float* depth = nullptr;   ///< metres, row-major, width x height, 0 = invalid
-  const float* colour = nullptr;  ///< RGB in [0, 1], 3 floats per pixel; nullptr = depth only
+  const std::uint8_t* colour = nullptr;  ///< RGB, 3 bytes per pixel; nullptr = depth only
+  /// The float in [0, 1] each 8-bit value is for Open3D's kernel: 256 entries, as OpenCV's
+  /// convertTo(CV_32F, 1 / 255.0) makes them (TsdfVolume converts the frame that way for it).
+  const float* colour_values = nullptr;
   int width = 0;
   int height = 0;
   /// Pinhole intrinsic (Open3D's: the principal point as TsdfVolume passes it, shifted by half a

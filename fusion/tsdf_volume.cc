@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -366,8 +367,17 @@ void IntegrateWithOwnKernel(tg::VoxelBlockGrid& grid, const TsdfOptions& options
   g.weight = values.at(1).GetDataPtr<float>();
   g.colour = values.at(2).GetDataPtr<float>();
   IntegrationFrame f;
+  // 8-bit colour read through the floats OpenCV's conversion makes of each value: a quarter of
+  // the bytes a float frame would take through the cache, and no conversion of the frame.
+  static const cv::Mat colour_values = [] {
+    cv::Mat bytes(1, 256, CV_8UC1), values;
+    for (int v = 0; v < 256; ++v) bytes.at<std::uint8_t>(0, v) = static_cast<std::uint8_t>(v);
+    bytes.convertTo(values, CV_32F, 1.0 / 255.0);
+    return values;
+  }();
   f.depth = depth.ptr<float>();
-  f.colour = colour.ptr<float>();
+  f.colour = colour.ptr<std::uint8_t>();
+  f.colour_values = colour_values.ptr<float>();
   f.width = depth.cols;
   f.height = depth.rows;
   f.fx = camera.fx();
@@ -391,11 +401,8 @@ void TsdfVolume::Integrate(const scene::RgbdSample& frame, const scene::CameraIn
   impl_->field.reset();
   impl_->mesh.reset();
   cv::Mat depth = frame.depth.isContinuous() ? frame.depth : frame.depth.clone();
-  cv::Mat colour;
-  frame.rgb.convertTo(colour, CV_32FC3, 1.0 / 255.0);
   const core::Tensor dt(depth.data, core::Float32, {depth.rows, depth.cols, 1});
-  const core::Tensor ct(colour.data, core::Float32, {colour.rows, colour.cols, 3});
-  const tg::Image di(dt), ci(ct);
+  const tg::Image di(dt);
   const core::Tensor k = Intrinsic(camera), e = Extrinsic(frame.pose);
   const float trunc = static_cast<float>(options_.trunc_voxels);
   const float dmax = static_cast<float>(options_.depth_max_m);
@@ -405,8 +412,12 @@ void TsdfVolume::Integrate(const scene::RgbdSample& frame, const scene::CameraIn
     return;
   }
   if (options_.integrator == "open3d") {
-    impl_->grid.Integrate(blocks, di, ci, IntegrationIntrinsic(camera), e, 1.0f, dmax, trunc);
+    cv::Mat colour;
+    frame.rgb.convertTo(colour, CV_32FC3, 1.0 / 255.0);
+    const core::Tensor ct(colour.data, core::Float32, {colour.rows, colour.cols, 3});
+    impl_->grid.Integrate(blocks, di, tg::Image(ct), IntegrationIntrinsic(camera), e, 1.0f, dmax, trunc);
   } else {
+    const cv::Mat colour = frame.rgb.isContinuous() ? frame.rgb : frame.rgb.clone();
     IntegrateWithOwnKernel(impl_->grid, options_, blocks, depth, colour, camera, e);
   }
   ++impl_->frames;
