@@ -27,10 +27,6 @@ struct FloatCamera {
   }
 };
 
-/// One block. Open3D computes, per voxel at integer world-voxel coordinates (x, y, z):
-///   xs = float(x) * voxel_size (and ys, zs); xc = xs*e00 + ys*e01 + zs*e02 + e03 (left to right)
-/// The three products depend on one coordinate each, so they are computed once per row/column/
-/// layer here and summed in Open3D's order: the same floats.
 /// Where Open3D reads a voxel's colour: it unprojects the depth pixel (ui, vi) at depth 1 and
 /// projects it back with the colour intrinsic (equal to the depth one here), then rounds. Each
 /// coordinate depends on ui or vi alone, so both are tabulated once per frame with Open3D's
@@ -53,6 +49,10 @@ struct ColourPixels {
   }
 };
 
+/// One block. Open3D computes, per voxel at integer world-voxel coordinates (x, y, z):
+///   xs = float(x) * voxel_size (and ys, zs); xc = xs*e00 + ys*e01 + zs*e02 + e03 (left to right)
+/// The three products depend on one coordinate each, so they are computed once per row/column/
+/// layer here and summed in Open3D's order: the same floats.
 void IntegrateBlock(const VoxelBlocks& g, int block, const IntegrationFrame& f, const FloatCamera& c,
                     const ColourPixels& cp) {
   const int r = g.resolution;
