@@ -380,10 +380,12 @@ void IntegrateWithOwnKernel(tg::VoxelBlockGrid& grid, const TsdfOptions& options
   f.colour_values = colour_values.ptr<float>();
   f.width = depth.cols;
   f.height = depth.rows;
-  f.fx = camera.fx();
-  f.fy = camera.fy();
-  f.cx = camera.cx() + 0.5;  // IntegrationIntrinsic's shift
-  f.cy = camera.cy() + 0.5;
+  const core::Tensor k = IntegrationIntrinsic(camera);  // what Open3D's kernel is given
+  const double* kp = k.GetDataPtr<double>();
+  f.fx = kp[0];
+  f.cx = kp[2];
+  f.fy = kp[4];
+  f.cy = kp[5];
   const core::Tensor e = extrinsic.Contiguous();
   const double* ep = e.GetDataPtr<double>();
   for (int i = 0; i < 3; ++i)

@@ -2,11 +2,7 @@
 /// @brief The TSDF's own integration kernel (fusion/tsdf_integrate.h) against Open3D's
 /// VoxelBlockGrid::Integrate: the same volume, byte for byte, on noisy sim frames, with the hash
 /// map growing on the way, for both block sizes.
-#include <filesystem>
-#include <fstream>
-#include <iterator>
 #include <string>
-#include <vector>
 
 #include <catch2/catch.hpp>
 #include <yaml-cpp/yaml.h>
@@ -15,15 +11,11 @@
 #include "scene/sim_scene.h"
 #include "scene/sim_sensor_options.h"
 #include "scene/trajectory.h"
+#include "tests/read_file.h"
 #include "tests/temp_dir.h"
 
 namespace p2i::fusion {
 namespace {
-
-std::string Bytes(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-}
 
 TEST_CASE("TsdfVolume: its own integration kernel fuses noisy frames into the volume Open3D's "
           "kernel fuses, byte for byte",
@@ -55,7 +47,7 @@ TEST_CASE("TsdfVolume: its own integration kernel fuses noisy frames into the vo
   const std::string a = dir.path() + "/own.npz", b = dir.path() + "/open3d.npz";
   own.Save(a);
   open3d.Save(b);
-  const std::string own_bytes = Bytes(a), open3d_bytes = Bytes(b);
+  const std::string own_bytes = testing::ReadFile(a), open3d_bytes = testing::ReadFile(b);
   REQUIRE(own_bytes.size() > 100000);
   CHECK(own_bytes.size() == open3d_bytes.size());
   CHECK((own_bytes == open3d_bytes));
