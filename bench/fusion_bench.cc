@@ -336,6 +336,7 @@ struct Row {
 std::vector<Row> RenderRows(const Args& a) {
   std::vector<Row> rows = {{"blend (mesh)", "{}"},
                            {"blend_bilinear", "{blend: {sampling: bilinear}}"},
+                           {"blend_catmull_rom", "{blend: {cubic_a: -0.5}}"},  // the bicubic before session 50
                            {"blend_raycast", "{tsdf: {surface: raycast}}"},
                            {"blend_raycast_no_refine", "{tsdf: {surface: raycast, refine_hits: false}}"},
                            {"blend_block16", "{tsdf: {block_resolution: 16}}"},

@@ -131,6 +131,7 @@ class KeyframeBlender {
     floor_g_ = static_cast<float>(bo.grazing_floor);
     sigma_ = static_cast<float>(bo.angle_sigma_deg / kRadToDeg);
     far_z_ = static_cast<float>(bo.far_depth_m);
+    cubic_a_ = static_cast<float>(bo.cubic_a);
     view_z_ = r_wc_.col(2);
   }
 
@@ -191,7 +192,7 @@ class KeyframeBlender {
       if (pr.dk > 0.0f && pr.dk < 0.8f * far_z_) continue;  // it saw something nearer there
       const Eigen::Vector3f to_k = s.centre - xw;
       pen_[j] = AngleFromSinCos(dir.cross(to_k).norm(), -dir.dot(to_k));
-      col_[j] = bicubic_ ? SampleBicubic(*s.colour, pr.lu, pr.lv)
+      col_[j] = bicubic_ ? SampleBicubic(*s.colour, pr.lu, pr.lv, cubic_a_)
                          : SampleBilinear(*s.colour, pr.lu, pr.lv);
       vis_[j] = true;
       p_max = std::max(p_max, pen_[j]);
@@ -231,7 +232,7 @@ class KeyframeBlender {
       pen_[j] = a + res_w_ * res;
       ang_[j] = a;
       graze_[j] = std::max(floor_g_, nw.dot(to_k) / dist_k);
-      col_[j] = bicubic_ ? SampleBicubic(*s.colour, lu, lv) : SampleBilinear(*s.colour, lu, lv);
+      col_[j] = bicubic_ ? SampleBicubic(*s.colour, lu, lv, cubic_a_) : SampleBilinear(*s.colour, lu, lv);
       if (keyframe_depth_) {  // the keyframe's own surface point on its ray, as the view's z
         const Eigen::Vector3f xs = s.centre + (xw - s.centre) * (dk / pr.z);
         zk_[j] = (xs - centre_).dot(view_z_);
@@ -291,7 +292,7 @@ class KeyframeBlender {
   Eigen::Vector3f centre_, view_z_;  // view_z_: the view's optical axis in the world
   float fx_, fy_, cx_, cy_, kfx_, kfy_, kcx_, kcy_;
   int kw_, kh_;
-  float vis_abs_, vis_rel_, res_w_, eps_, floor_g_, sigma_, far_z_;
+  float vis_abs_, vis_rel_, res_w_, eps_, floor_g_, sigma_, far_z_, cubic_a_;
   bool bicubic_ = true;
   std::array<float, 16> pen_{}, graze_{}, ang_{}, wgt_{}, zk_{};
   std::array<cv::Vec3f, 16> col_{};
@@ -306,7 +307,7 @@ BlendOptions BlendOptions::FromYaml(const YAML::Node& node, const std::string& s
               {"k", "metres_per_degree", "visibility_abs_m", "visibility_rel", "resolution_weight",
                "penalty_epsilon", "grazing_floor", "angle_sigma_deg", "keyframe_min_distance",
                "sampling", "keyframe_levels", "far_depth_m", "align_iterations",
-               "align_max_shift_px", "align_flow_preset", "depth", "keyframe_denoise"},
+               "align_max_shift_px", "align_flow_preset", "depth", "keyframe_denoise", "cubic_a"},
               "blend options");
   BlendOptions o;
   if (node["k"]) o.k = r.Int(node["k"], "k");
@@ -320,6 +321,7 @@ BlendOptions BlendOptions::FromYaml(const YAML::Node& node, const std::string& s
   r.OptionalDouble(node, "keyframe_min_distance", "blend", &o.keyframe_min_distance);
   r.OptionalDouble(node, "far_depth_m", "blend", &o.far_depth_m);
   r.OptionalDouble(node, "keyframe_denoise", "blend", &o.keyframe_denoise);
+  r.OptionalDouble(node, "cubic_a", "blend", &o.cubic_a);
   if (node["sampling"]) o.sampling = r.String(node["sampling"], "sampling");
   if (node["depth"]) o.depth = r.String(node["depth"], "depth");
   if (node["keyframe_levels"]) o.keyframe_levels = r.Int(node["keyframe_levels"], "keyframe_levels");
@@ -359,6 +361,9 @@ void BlendOptions::Validate() const {
     fail("far_depth_m must be >= 0 (0 = off), got " + std::to_string(far_depth_m));
   if (!(keyframe_denoise >= 0.0 && keyframe_denoise <= 64.0))
     fail("keyframe_denoise must be in [0, 64] grey levels (0 = off), got " + std::to_string(keyframe_denoise));
+  if (!(cubic_a >= -1.0 && cubic_a <= 0.0))
+    fail("cubic_a must be in [-1, 0] (-0.5 Catmull-Rom, -0.75 OpenCV's INTER_CUBIC), got " +
+         std::to_string(cubic_a));
   if (keyframe_levels < 0 || keyframe_levels > 6)
     fail("keyframe_levels must be in [0, 6], got " + std::to_string(keyframe_levels));
   if (sampling != "auto" && sampling != "bicubic" && sampling != "bilinear")

@@ -50,10 +50,16 @@ struct BlendOptions {
   /// from every keyframe (0 = every frame is a keyframe; the TSDF always gets every frame).
   double keyframe_min_distance = 0.0;
   /// How a keyframe's colour is read at a surface point's projection (keyframe_sampling.h):
-  /// "bicubic" (Catmull-Rom; sharper), "bilinear", or "auto" (the default since 2026-12-04):
-  /// bicubic where the view reads its pyramid level at about one level pixel per view pixel,
-  /// bilinear where it skips pixels of the level (UseBicubicRead, keyframe_pyramid.h).
+  /// "bicubic" (Keys' cubic, cubic_a below; sharper), "bilinear", or "auto" (the default since
+  /// 2026-12-04): bicubic where the view reads its pyramid level at about one level pixel per
+  /// view pixel, bilinear where it skips pixels of the level (UseBicubicRead, keyframe_pyramid.h).
   std::string sampling = "auto";
+  /// The bicubic read's kernel: Keys' cubic convolution with this parameter, in [-1, 0]. -0.75
+  /// (the default since session 50, OpenCV's INTER_CUBIC) keeps more of the detail between pixels
+  /// than -0.5 (Catmull-Rom, the kernel before; exact on linear ramps, where -0.75 reads up to
+  /// ~0.04 px off): LPIPS 0.002-0.004 lower on both sims and study-room, PSNR and SSIM level
+  /// (docs/RESULTS.md "A sharper bicubic read").
+  double cubic_a = -0.75;
   /// Pre-filtered half, quarter, ... copies of each keyframe's colour kept for views rendered
   /// below the camera's resolution (keyframe_pyramid.h): a view reads the level nearest at or
   /// above its own focal length, at most this many halvings down (0 = always read the keyframe
