@@ -56,7 +56,7 @@ inline void CubicWeights(float t, float a, float w[4]) {
 /// Bicubic RGB sample (CubicWeights with parameter `a`) of a CV_8UC3 image at (x, y), in [0, 1]
 /// (clamped: the cubic overshoots at edges); taps beyond the border repeat the edge pixel. Same
 /// domain as SampleBilinear.
-inline cv::Vec3f SampleBicubic(const cv::Mat& rgb, float x, float y, float a = kCatmullRomA) {
+inline cv::Vec3f SampleBicubic(const cv::Mat& rgb, float x, float y, float a) {
   const int xi = static_cast<int>(std::floor(x)), yi = static_cast<int>(std::floor(y));
   float wx[4], wy[4];
   CubicWeights(x - static_cast<float>(xi), a, wx);

@@ -22,7 +22,7 @@ TEST_CASE("keyframe sampling: exact at pixel centres and on linear ramps", "[uni
       const cv::Vec3b p = noise.at<cv::Vec3b>(y, x);
       const float fx = static_cast<float>(x), fy = static_cast<float>(y);
       const cv::Vec3f a = SampleBilinear(noise, fx, fy);
-      const cv::Vec3f b = SampleBicubic(noise, fx, fy);
+      const cv::Vec3f b = SampleBicubic(noise, fx, fy, kCatmullRomA);
       const cv::Vec3f b75 = SampleBicubic(noise, fx, fy, -0.75f);
       for (int c = 0; c < 3; ++c) {
         CHECK(a[c] == Approx(p[c] / 255.0f).margin(1e-6));
@@ -38,7 +38,8 @@ TEST_CASE("keyframe sampling: exact at pixel centres and on linear ramps", "[uni
       ramp.at<cv::Vec3b>(y, x) = cv::Vec3b(8 * x + 12 * y, 8 * x + 12 * y + 5, 8 * x + 12 * y + 9);
   for (const float x : {1.25f, 3.5f, 7.9f}) {
     for (const float y : {1.1f, 4.5f, 6.75f}) {
-      const cv::Vec3f a = SampleBilinear(ramp, x, y), b = SampleBicubic(ramp, x, y);
+      const cv::Vec3f a = SampleBilinear(ramp, x, y);
+      const cv::Vec3f b = SampleBicubic(ramp, x, y, kCatmullRomA);
       for (int c = 0; c < 3; ++c) {
         const float want = (8.0f * x + 12.0f * y + (c == 0 ? 0.0f : c == 1 ? 5.0f : 9.0f)) / 255.0f;
         CHECK(a[c] == Approx(want).margin(1e-5));
@@ -63,15 +64,15 @@ TEST_CASE("keyframe sampling: the bicubic keeps more of a one-pixel line, clampe
   line.col(3).setTo(cv::Scalar::all(255));
   // Half a pixel beside the line: the bilinear read halves it, the bicubic keeps 9/16.
   CHECK(SampleBilinear(line, 3.5f, 4.0f)[0] == Approx(0.5f).margin(1e-6));
-  CHECK(SampleBicubic(line, 3.5f, 4.0f)[0] == Approx(0.5625f).margin(1e-6));
-  CHECK(SampleBicubic(line, 2.5f, 4.0f)[1] == Approx(0.5625f).margin(1e-6));
+  CHECK(SampleBicubic(line, 3.5f, 4.0f, kCatmullRomA)[0] == Approx(0.5625f).margin(1e-6));
+  CHECK(SampleBicubic(line, 2.5f, 4.0f, kCatmullRomA)[1] == Approx(0.5625f).margin(1e-6));
   // Keys' a = -0.75 (OpenCV's INTER_CUBIC) keeps 19/32, with a deeper negative lobe beside it.
   CHECK(SampleBicubic(line, 3.5f, 4.0f, -0.75f)[0] == Approx(0.59375f).margin(1e-6));
   // One pixel further the cubic's negative lobe would go below 0: clamped.
-  CHECK(SampleBicubic(line, 4.5f, 4.0f)[2] == 0.0f);
+  CHECK(SampleBicubic(line, 4.5f, 4.0f, kCatmullRomA)[2] == 0.0f);
   // At the image corner the taps repeat the edge pixels.
-  CHECK(SampleBicubic(line, 0.0f, 0.0f)[0] == 0.0f);
-  CHECK(SampleBicubic(line, 7.0f, 7.0f)[0] == 0.0f);
+  CHECK(SampleBicubic(line, 0.0f, 0.0f, kCatmullRomA)[0] == 0.0f);
+  CHECK(SampleBicubic(line, 7.0f, 7.0f, kCatmullRomA)[0] == 0.0f);
 }
 
 TEST_CASE("BlendOptions: sampling is read, checked, and changes the blend", "[unit]") {
